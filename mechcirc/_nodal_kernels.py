@@ -419,7 +419,8 @@ def band_bound(F, kl, ipiv, rows, p, x, d, out):
         for i in range(n):
             for b in range(nb):
                 acc[b] += _l1(x[k0 + b, p[i]]) * u[i, b]
-        out[k0:k0 + nb] = acc[:nb]
+        for b in range(nb):                 # (a loop: a slice assignment compiles numba's
+            out[k0 + b] = acc[b]            # shape-mismatch message, 1.5 s of CPU)
 
 
 @_jit_inline
@@ -470,5 +471,6 @@ def sensitivities(omega, x, scale, e_i, e_j, e_m, e_k, e_c, s_row, s_col, s_val,
             for b in range(nb):
                 d = _hypot2(xr[p1, b] - xr[p2, b], xi[p1, b] - xi[p2, b])
                 acc[1, b] += lr * d * mag[c, b]
-        S[k0:k0 + m] = acc[0, :m]
-        Sd[k0:k0 + m] = acc[1, :m]
+        for b in range(m):                  # (a loop, as in band_bound)
+            S[k0 + b] = acc[0, b]
+            Sd[k0 + b] = acc[1, b]

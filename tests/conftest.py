@@ -186,6 +186,64 @@ def _once_per_run(tmp_path_factory, name, compute):
         return done
 
 
+@contextlib.contextmanager
+def _crosschecks_computed_once(computed):
+    """While in effect, a sley or scene cross-check computed again with equal arguments is
+    a deep copy of the first one's result (``computed``: pickled arguments -> result, and
+    how many times it called ``on_step``, called as often again).
+
+    ``crosscheck`` with ``--unit Hz`` or ``rpm`` or ``--json`` computes what the
+    same command in rad/s computed (tests/test_unit18_crosscheck.py runs each scene and
+    the sley preset three times: 4.3 s of CPU of 6.6): the command line's parsing, unit
+    conversion and printing still run for each argv; only the computation, called with
+    arguments equal to an earlier call's (pickled bytes equal; an option that changed
+    them computes afresh), is not repeated.
+    """
+    import copy
+    import pickle
+
+    from mechcirc.scene import crosscheck as scene_crosscheck
+    from mechcirc.sley import crosscheck as sley_crosscheck
+
+    def once(compute):
+        takes_steps = "on_step" in (compute.__kwdefaults__ or {})
+
+        def call(*args, **kwargs):
+            on_step = kwargs.pop("on_step", None)
+            try:
+                key = pickle.dumps((compute.__qualname__, args, sorted(kwargs.items())))
+            except Exception:                   # not picklable: computed as usual
+                key = None
+            if key in computed:
+                result, steps = computed[key]
+                for _ in range(steps if on_step else 0):
+                    on_step()
+                return copy.deepcopy(result)
+            steps = [0]
+
+            def step():
+                steps[0] += 1
+                if on_step is not None:
+                    on_step()
+
+            result = compute(*args, on_step=step, **kwargs) if takes_steps else \
+                compute(*args, **kwargs)
+            if key is not None:
+                computed[key] = (copy.deepcopy(result), steps[0])
+            return result
+        return call
+
+    saved = [(m, name, getattr(m, name)) for m, name in
+             ((sley_crosscheck, "crosscheck_sley"), (scene_crosscheck, "crosscheck_scene"))]
+    for module, name, compute in saved:
+        setattr(module, name, once(compute))
+    try:
+        yield
+    finally:
+        for module, name, compute in saved:
+            setattr(module, name, compute)
+
+
 @pytest.fixture(scope="session")
 def cli_once(tmp_path_factory):
     """``cli_once(argv)``: (status, stdout, stderr) of ``mechcirc ARGV`` in-process, run once.
@@ -196,7 +254,10 @@ def cli_once(tmp_path_factory):
     base temporary folder (a worker that finds another running the command
     waits for its result instead of running it a second time).  Only for
     commands that read shipped inputs and nothing a test patches (no
-    ``monkeypatch`` in effect while it runs).
+    ``monkeypatch`` in effect while it runs).  While a command runs, a sley or scene
+    cross-check with the arguments of one computed before is not computed again
+    (:func:`_crosschecks_computed_once`): ``--unit`` and ``--json`` print what the
+    rad/s command computed.
     """
     import hashlib
     import io
@@ -205,10 +266,12 @@ def cli_once(tmp_path_factory):
     from mechcirc.cli import main
 
     done: dict[tuple[str, ...], tuple[int, str, str]] = {}
+    computed: dict[bytes, tuple[object, int]] = {}
 
     def execute(key):
         out, err = io.StringIO(), io.StringIO()
-        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), \
+                _crosschecks_computed_once(computed):
             try:
                 status = main(list(key))
             except SystemExit as exc:

@@ -72,8 +72,10 @@ def test_adaptive_sweep_resolves_damped_peaks_with_few_points():
         assert np.abs(s.Q0).max() == pytest.approx(peak, rel=0.01)
         # A logarithmic grid is sure to land within 1 % of the peak only if its step
         # is below the width of the band where |Q0| > 0.99·peak; it then needs many
-        # times the adaptive grid's points.
-        w = np.linspace(0.9 * wn, 1.1 * wn, 2_000_001)
+        # times the adaptive grid's points.  (The band's edges to 1e-6·ωn: on 2,000,001
+        # points instead of 200,001, 0.4 s of CPU more, needed/3 moved by under 2 %, at
+        # 1,347, 42,640 and 8,528 against the adaptive grid's 111, 155 and 137 points.)
+        w = np.linspace(0.9 * wn, 1.1 * wn, 200_001)
         K = 1 / (k / (1j * w) + c) + 1 / (1j * w * m)
         band = w[np.abs(1 / K) >= 0.99 * peak]
         needed = math.log(1e4 / 0.1) / math.log(band[-1] / band[0])

@@ -136,12 +136,14 @@ FLAT = ["cam", "--law", "cycloidal", "--rise", "120", "--dwell", "60", "--return
 def test_an_oscillating_flat_face_reports_the_curvature_written_out_here(capsys):
     """--follower oscillating_flat: the smallest radius of curvature printed against
     ρ = p + (p_θθ φ_θ − p_θ φ_θθ)/φ_θ³ of the face's line through the pivot (p = D sin ψ,
-    ψ = asin(r_b/D) + s, φ_θ = −(1 + s′)), the cycloidal law written out on 2e6 angles;
-    the 4 decimals shown (the CLI refines its extreme between its 721 angles)."""
+    ψ = asin(r_b/D) + s, φ_θ = −(1 + s′)), the cycloidal law written out on 200,001
+    angles; the 4 decimals shown (the CLI refines its extreme between its 721 angles).  (On
+    2,000,001 angles, 0.53 s of CPU more, the minimum moved by 2.3e-9 mm, to 24.33118550 mm,
+    3.5e-5 mm from where the 4th decimal would change: the same text is asserted.)"""
     status, out, err = run(FLAT + ["--pivot", "130"], capsys)
     assert status == 0 and err == "", err
     h, b1, d1 = math.radians(8.0), math.radians(120.0), math.radians(60.0)
-    th = np.linspace(0.0, 2 * math.pi, 2_000_001)
+    th = np.linspace(0.0, 2 * math.pi, 200_001)
     s, s1, s2 = (np.zeros_like(th) for _ in range(3))
     for lo, sign in ((0.0, 1.0), (b1 + d1, -1.0)):
         on = (th >= lo) & (th < lo + b1)

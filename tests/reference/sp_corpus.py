@@ -148,12 +148,25 @@ def lossless(expr) -> bool:
     return True
 
 
-def critical_points(expr, lo: float, hi: float, n_grid: int = 400) -> list[float]:
+#: critical_points' answers so far: (repr of the tree, lo, hi, n_grid) -> the points.
+_CRITICAL: dict = {}
+
+
+def critical_points(expr, lo: float, hi: float, n_grid: int = 400) -> list:
     """Zeros and poles of K = jX of a lossless ``expr`` in [lo, hi], to 40 digits.
 
     X(ω) rises between its poles (Foster), so each sign change of X on a log grid
     brackets one zero (− to +) or one pole (+ to −); bisection in mpmath finds it.
+    Computed once per process for a tree (its repr: every value's digits) and
+    interval: tests/test_nodal_corpus.py builds the small corpus ten times.
     """
+    key = (repr(expr), lo, hi, n_grid)
+    if key not in _CRITICAL:
+        _CRITICAL[key] = _critical_points(expr, lo, hi, n_grid)
+    return list(_CRITICAL[key])
+
+
+def _critical_points(expr, lo: float, hi: float, n_grid: int) -> list:
     grid = np.geomspace(lo, hi, n_grid)
     roots = []
     with mpmath.workdps(DIGITS):
