@@ -60,8 +60,8 @@ import numpy as np
 
 from .circuit import LAWS, Circuit, Drive
 from .resonances import Resonance, Resonances, constraint_basis, pencil, resonance_pairs
-from .errors import unknown_name
-from .sources import NamedValues, summary_repr
+from .errors import InputError, unknown_name
+from .sources import NamedValues, did_you_mean, summary_repr
 
 __all__ = ["Mode", "Modes", "SweepSensitivity", "modes", "sweep_sensitivity"]
 
@@ -445,16 +445,12 @@ def sweep_sensitivity(circuit: Circuit, omega, names=None) -> SweepSensitivity:
 
 def _values_named(circuit: Circuit, names) -> tuple[dict, list]:
     """``(every element's, lever's and .param's value, the names asked (default all), checked)``."""
-    from .errors import InputError
-
     value = {e.name: e.value for e in circuit.elements} | \
         {lv.name: lv.ratio for lv in circuit.levers} | \
         {p: float(v) for p, v in circuit.params.items()}
     names = list(value) if names is None else list(dict.fromkeys(names))
     unknown = [n for n in names if n not in value]
     if unknown:
-        from .sources import did_you_mean
-
         raise InputError(f"no element, lever or .param named {unknown[0]!r}"
                          f"{did_you_mean(unknown[0], value)} (there are: {', '.join(value)})")
     return value, names
