@@ -72,7 +72,10 @@ _CHUNK = 128
 def _lazy(key: str, names: str):
     """A dictionary attribute of :class:`Mode` made from its arrays on first use."""
     def make(self) -> dict:
-        values = self._dv() if key == "velocity" else self._values.get(key)
+        values = self._dv() if key in ("velocity", "force") else self._values.get(key)
+        if values is not None and key == "force":       # Q = y·s^(−power)·Δv
+            y, power = self._names["law"]
+            values = y * self.s ** -power * values
         if values is not None and key in ("shape", "velocity"):
             values = values.astype(complex)     # real for an undamped root: complex as documented
         what, where = ("node", " in this mode's shape") if names == "nodes" else \
@@ -132,16 +135,7 @@ class Mode:
     velocity = _lazy("velocity", "elements")
     sensitivity = _lazy("sensitivity", "all")
     zeta_sensitivity = _lazy("zeta_sensitivity", "all")
-
-    @functools.cached_property
-    def force(self) -> dict:
-        """See the class docstring (made from ``velocity`` on first use: Q = y·s^(−power)·Δv)."""
-        v = self._dv()
-        if v is None:
-            return NamedValues((), "element", " in this mode's force")
-        y, power = self._names["law"]
-        return NamedValues(zip(self._names["elements"], (y * self.s ** -power * v).tolist()),
-                           "element", " in this mode's force")
+    force = _lazy("force", "elements")
 
     def _dv(self) -> np.ndarray | None:
         """Δv of every element, from the shape (not kept: elements × roots values)."""
