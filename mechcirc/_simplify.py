@@ -42,7 +42,7 @@ import numpy as np
 from .circuit import FRAME, Circuit, Element
 from .errors import BandError, MechcircError, TopologyError
 from .netlist_writer import write as write_netlist      # the package's one netlist writer
-from .sources import summary_repr
+from .sources import did_you_mean, summary_repr
 from .units import parse_omega
 
 __all__ = ["BandError", "Simplified", "simplify", "parse_band", "check_band", "write_netlist"]
@@ -392,8 +392,6 @@ def _check_arguments(circuit: Circuit, band, tol, points, output) -> tuple[tuple
     if output is not None:
         names = {e.name for e in circuit.elements}
         if output not in names:
-            from .sources import did_you_mean
-
             raise MechcircError(f"output {output!r}: no element of that name"
                                 f"{did_you_mean(output, sorted(names))} "
                                 f"(elements: {_some(sorted(names))})")

@@ -60,8 +60,8 @@ import numpy as np
 
 from .circuit import LAWS, Circuit, Drive
 from .resonances import Resonance, Resonances, constraint_basis, pencil, resonance_pairs
-from .errors import unknown_name
-from .sources import NamedValues, summary_repr
+from .errors import InputError, unknown_name
+from .sources import NamedValues, did_you_mean, summary_repr
 
 __all__ = ["Mode", "Modes", "SweepSensitivity", "modes", "sweep_sensitivity"]
 
@@ -72,7 +72,10 @@ _CHUNK = 128
 def _lazy(key: str, names: str):
     """A dictionary attribute of :class:`Mode` made from its arrays on first use."""
     def make(self) -> dict:
-        values = self._dv() if key == "velocity" else self._values.get(key)
+        values = self._dv() if key in ("velocity", "force") else self._values.get(key)
+        if values is not None and key == "force":       # Q = y·s^(−power)·Δv
+            y, power = self._names["law"]
+            values = y * self.s ** -power * values
         if values is not None and key in ("shape", "velocity"):
             values = values.astype(complex)     # real for an undamped root: complex as documented
         what, where = ("node", " in this mode's shape") if names == "nodes" else \
@@ -132,16 +135,7 @@ class Mode:
     velocity = _lazy("velocity", "elements")
     sensitivity = _lazy("sensitivity", "all")
     zeta_sensitivity = _lazy("zeta_sensitivity", "all")
-
-    @functools.cached_property
-    def force(self) -> dict:
-        """See the class docstring (made from ``velocity`` on first use: Q = y·s^(−power)·Δv)."""
-        v = self._dv()
-        if v is None:
-            return NamedValues((), "element", " in this mode's force")
-        y, power = self._names["law"]
-        return NamedValues(zip(self._names["elements"], (y * self.s ** -power * v).tolist()),
-                           "element", " in this mode's force")
+    force = _lazy("force", "elements")
 
     def _dv(self) -> np.ndarray | None:
         """Δv of every element, from the shape (not kept: elements × roots values)."""
@@ -445,16 +439,12 @@ def sweep_sensitivity(circuit: Circuit, omega, names=None) -> SweepSensitivity:
 
 def _values_named(circuit: Circuit, names) -> tuple[dict, list]:
     """``(every element's, lever's and .param's value, the names asked (default all), checked)``."""
-    from .errors import InputError
-
     value = {e.name: e.value for e in circuit.elements} | \
         {lv.name: lv.ratio for lv in circuit.levers} | \
         {p: float(v) for p, v in circuit.params.items()}
     names = list(value) if names is None else list(dict.fromkeys(names))
     unknown = [n for n in names if n not in value]
     if unknown:
-        from .sources import did_you_mean
-
         raise InputError(f"no element, lever or .param named {unknown[0]!r}"
                          f"{did_you_mean(unknown[0], value)} (there are: {', '.join(value)})")
     return value, names
