@@ -2,7 +2,7 @@
 
 Points and vectors are complex numbers x + iy.  Each function uses arithmetic,
 ``np.sqrt`` and ``np.maximum`` only, on numpy arrays (the vectorised solver of
-:mod:`.linkage_solver`, :meth:`.FourBar.evaluate`) or on scalars alike.  No
+:mod:`.linkage_solver`, its one user) or on scalars alike.  No
 compiled copy of the dyads exists: a numba loop over the positions measured no
 faster on any shipped command (:mod:`._linkage_kernels`, docs/performance.md).
 """
