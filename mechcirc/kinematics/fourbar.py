@@ -281,6 +281,26 @@ class FourBar:
         return cast(LinkageType, {"crank": "crank-rocker", "frame": "double-crank",
                                   "coupler": "double-rocker", "rocker": "rocker-crank"}[shortest])
 
+    def _crossings_note(self, crossings) -> str:
+        """The summary's note on a change-point linkage's branch crossings."""
+        # B on D (a deltoid with crank = frame and coupler = rocker, θ = 0): no line of
+        # four joints there, but coupler and rocker on each other, their angles undefined
+        on_d = [t for t in crossings if t == 0.0 and self.crank == self.frame
+                and self.coupler == self.rocker]
+        inline = [t for t in crossings if t not in on_d]
+        where = " and ".join(f"{math.degrees(t):g}°" for t in inline)
+        what = []
+        if on_d:
+            what.append("B falls on D at θ = 0°, where coupler and rocker lie on each other "
+                        "and may turn freely (their angles, μ and ν are undefined there)")
+        if inline:
+            what.append(f"all four joints fall on one line at θ = {where}, where μ and ν are 0/0")
+        return ("change-point linkage"
+                + ("" if self.linkage_type == "change-point" else f" ({self.linkage_type})")
+                + ": " + "; ".join(what) + "; its two assembly modes cross there and the motion "
+                "beyond depends on which branch the linkage takes, so the ν range and ε4T are "
+                "not given")
+
     def branch_crossings(self) -> tuple[float, ...]:
         """Crank angles θ [rad] in [0, 2π) where the four joints are collinear and the branches cross.
 
@@ -651,14 +671,7 @@ class FourBar:
         if omega is not None:
             doc["omega"] = omega
         if crossings:
-            where = " and ".join(f"{math.degrees(t):g}°" for t in crossings)
-            doc["notes"].append(
-                "change-point linkage"
-                + ("" if self.linkage_type == "change-point" else f" ({self.linkage_type})")
-                + f": all four joints fall on one line "
-                f"at θ = {where}, where its two assembly modes cross; μ and ν are 0/0 there and "
-                f"the motion beyond depends on which branch the linkage takes, so the ν range "
-                f"and ε4T are not given")
+            doc["notes"].append(self._crossings_note(crossings))
             doc["nu_min"] = doc["nu_max"] = None
             doc["theta_at_nu_min_deg"] = doc["theta_at_nu_max_deg"] = None
             if omega is not None:

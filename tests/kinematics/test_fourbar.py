@@ -242,6 +242,18 @@ def test_change_point_summary_withholds_nu_and_says_why():
         FourBar(30, 100, 30, 100).transfer(0.0)
 
 
+def test_deltoid_summary_says_b_falls_on_d_not_that_the_joints_line_up():
+    # 50/30/30/50: at θ = 0, B = (a, 0) = D, so C may lie anywhere on the circle of
+    # radius c about D; the joints are not in line there and the angles are undefined
+    (note,) = FourBar(50, 30, 30, 50).summary()["notes"]
+    assert "B falls on D at θ = 0°" in note and "one line" not in note
+    # the rhombus has both: B on D at 0°, the four joints in line at 180°
+    (note,) = FourBar(40, 40, 40, 40).summary()["notes"]
+    assert "B falls on D at θ = 0°" in note and "one line at θ = 180°" in note
+    (note,) = FourBar(30, 100, 30, 100).summary()["notes"]
+    assert "B falls on D" not in note and "one line at θ = 0° and 180°" in note
+
+
 def _fd_nu(fb, th, h=1e-4):
     """ν by second differences of the rocker angle (positions only), unwrapped."""
     phi = np.unwrap(np.array([fb.rocker_angle(np.asarray(th) + k * h) for k in (-1, 0, 1)]),
