@@ -248,7 +248,7 @@ def cmd_fourbar(args) -> int:
     if doc["branch_crossings_deg"]:
         print("  branches cross at θ = "
               + ", ".join(f"{t:g}°" for t in doc["branch_crossings_deg"])
-              + " (all four joints in line: the motion beyond is not fixed by the geometry)")
+              + " (the two assembly modes cross: the motion beyond is not fixed by the geometry)")
     if not doc["crank_rotates_fully"]:
         lo, hi = doc["crank_range_deg"]
         print(f"  the input link cannot turn fully: it rocks in θ ∈ [{lo:.3f}°, {hi:.3f}°]"
