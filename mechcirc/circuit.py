@@ -38,6 +38,7 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ._memo import Memos
 from .errors import NetlistError, unknown_name
 
 if TYPE_CHECKING:  # pragma: no cover - annotations of the delegates only
@@ -297,7 +298,7 @@ def element_unit(kind: str, drive: Drive | None) -> str:
 
 
 @dataclass(frozen=True)
-class Circuit:
+class Circuit(Memos):
     """A mechanical circuit: elements, levers and one drive.
 
     Build one with :func:`mechcirc.parse` or :func:`mechcirc.load`, or
@@ -451,11 +452,6 @@ class Circuit:
         from .interop.formula import formula
 
         return formula(self, **kwargs)
-
-    def __getstate__(self):
-        # Pickle the description only: the cached reduction tree nests as deep
-        # as the network (deeper than pickle recurses) and is rebuilt on use.
-        return {k: v for k, v in self.__dict__.items() if k not in ("_reduction", "nodal")}
 
     def __repr__(self) -> str:
         """A one-line summary; the elements are in ``.elements`` (a netlist of 10⁵ elements

@@ -303,7 +303,7 @@ class _Parser:
         self.names: dict[str, int] = {}
         #: Parsed expressions and unit factors, for symbolic formulas:
         #: ``("param", name)`` / ``(element, "value" | "eta")`` -> (Expr, factor); the fast
-        #: path stores ``raw`` or ``(raw, factor)`` until :func:`_materialise`.
+        #: path stores ``raw`` or ``(raw, factor)``; :func:`expressions_of` gives the Exprs.
         self.expressions: dict[tuple[str, str], _Stored] = {}
         #: node -> {True: (element, unit), False: ...}: rotational / translational units seen.
         self.node_kinds: dict[str, dict[bool, tuple[str, str, int]]] = {}
@@ -627,7 +627,7 @@ class _Parser:
                 continue
             names[name] = lineno
             # The parsed expression of a plain number, Expr("num", 0, raw), is
-            # made when expressions_of() is first asked (see _materialise).
+            # made by expressions_of() when asked (see _materialise).
             expressions[(name, "value")] = raw if u is None else (raw, u.factor)
             if eta_text is not None:
                 expressions[(name, "eta")] = eta
@@ -870,18 +870,22 @@ def expressions_of(circuit: Circuit) -> dict | None:
     now = (circuit.elements, circuit.levers, circuit.drive, circuit.params)
     if any(a is not b for a, b in zip(made_for, now)):
         return None
-    _materialise(expressions)
-    return expressions
+    return _materialise(expressions)
 
 
-def _materialise(expressions: dict) -> None:
-    """Turn the plain numbers the fast path stored (``raw`` or ``(raw, factor)``, raw a
-    float) into ``(Expr("num", 0, raw), factor)``, in place (order kept), once."""
+def _materialise(expressions: dict) -> dict:
+    """The table with the plain numbers the fast path stored (``raw`` or ``(raw, factor)``,
+    raw a float) as ``(Expr("num", 0, raw), factor)``, order kept: a new dict, so that
+    asking does not change the (frozen) circuit it was parsed for."""
+    out = {}
     for key, entry in expressions.items():
         if type(entry) is float:
-            expressions[key] = (_num_expr(entry), 1.0)
+            out[key] = (_num_expr(entry), 1.0)
         elif type(entry[0]) is float:
-            expressions[key] = (_num_expr(entry[0]), entry[1])
+            out[key] = (_num_expr(entry[0]), entry[1])
+        else:
+            out[key] = entry
+    return out
 
 
 def parse(text: str, source: str = "<string>", *,

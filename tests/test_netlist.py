@@ -346,7 +346,8 @@ def test_parsed_expressions_are_stored_with_the_circuit():
     expr, factor = expressions_of(c)[("S", "value")]
     assert expr.names() == {"k0"} and factor == 1.0
     renamed = dataclasses.replace(c, name="x")
-    assert expressions_of(renamed) is expressions_of(c)
+    assert renamed.expressions[-1] is c.expressions[-1]       # the one stored table
+    assert expressions_of(renamed) == expressions_of(c)
     assert expressions_of(pickle.loads(pickle.dumps(renamed)))[("S", "value")][0] == expr
     edited = dataclasses.replace(c, elements=(dataclasses.replace(c.elements[0], value=1.0),
                                               c.elements[1]))

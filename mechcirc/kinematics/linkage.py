@@ -79,6 +79,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from .._memo import Memos
 from ..errors import GeometryError, InputError, NetlistError, unknown_name
 from .linkage_solver import MAX_CONTINUATION_STEPS  # noqa: F401
 from .linkage_solver import LinkageMotion, LinkageState, Newton, motion, plan
@@ -161,7 +162,7 @@ def _rot(phi):
 
 
 @dataclass(frozen=True, eq=False)
-class Linkage:
+class Linkage(Memos):
     """A parsed planar linkage; see the module docstring for the file format.
 
     Use :func:`load_linkage` or :func:`parse_linkage` to build one.

@@ -42,6 +42,7 @@ from dataclasses import dataclass, field, replace
 from functools import cache, cached_property
 from typing import Any
 
+from .._memo import Memos
 from ..errors import MechcircError
 from ..sources import Table, brief, check_keys, checked_number, finite_number, is_name, located
 from ..units import in_si
@@ -255,7 +256,7 @@ def override_moment(source: str, old: Moment, fld: str, value) -> Moment:
 
 # ------------------------------------------------------------------ [shaft]
 @dataclass(frozen=True)
-class Motor:
+class Motor(Memos):
     """A motor's torque–speed characteristic T(ω) [N·m], referred to the main shaft.
 
     ``kind`` is ``"kloss"`` (``sync_speed`` ω_s [rad/s], ``breakdown_torque`` T_b
