@@ -67,36 +67,8 @@ def test_a_scene_is_unchanged_by_build_and_simulation(name):
     assert pickle.dumps(sc) == before
 
 
-DISC_ON_A_SHAFT = """
-name = "disc"
-units = "m"
-[points]
-A = [0.0, 0.0]
-B = [0.1, 0.0]
-[ground]
-points = ["A"]
-[links]
-crank = ["A", "B"]
-[[cranks]]
-link = "crank"
-omega = 100.0
-[[masses]]
-link = "crank"
-inertia = 0.004
-[drive]
-link = "crank"
-velocity = 1.0
-[shaft]
-flywheel = 0.5
-motor = "kloss"
-sync_speed = 100.0
-breakdown_torque = 20.0
-breakdown_slip = 0.25
-"""
-
-
 def test_a_scene_with_a_shaft_is_unchanged_by_simulate_shaft():
-    sc = S.parse_scene(DISC_ON_A_SHAFT)
+    sc = S.load_scene(ROOT / "examples" / "fnf_sixbar_scene.toml")    # a [shaft] with a motor
     before = pickle.dumps(sc)
     simulate_shaft(sc, startup=False, points=90)
     assert pickle.dumps(sc) == before
