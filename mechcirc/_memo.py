@@ -1,10 +1,12 @@
 """Memos on plain data: values derived from a frozen dataclass's own fields and kept on
-it (a :func:`functools.cached_property`, or a model another module caches in its
-``__dict__``), left out of its pickle and rebuilt on use."""
+it (a :func:`functools.cached_property`, or what another module derives and keeps with
+:meth:`Memos.memo`), left out of its pickle and rebuilt on use."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import fields
+from typing import Any
 
 __all__ = ["Memos"]
 
@@ -19,3 +21,12 @@ class Memos:
 
     def __getstate__(self):
         return {f.name: self.__dict__[f.name] for f in fields(self)}   # type: ignore[arg-type]
+
+    def memo(self, key: str, make: Callable[[], Any]) -> Any:
+        """``make()``, kept on this object under ``key``: built by the first call, the same
+        object after.  For a module that caches what it derives from this object's
+        fields (a circuit's state-space model); like every memo, never pickled."""
+        memos = self.__dict__        # type: ignore[attr-defined]
+        if key not in memos:
+            memos[key] = make()
+        return memos[key]

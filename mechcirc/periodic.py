@@ -458,7 +458,7 @@ def _resonances(circuit, omega_max, notes):
             return []
         cached = (omega_max, [(r.omega, r.zeta, r.error) for r in found
                               if r.kind == "resonance"])
-        object.__setattr__(circuit, "_periodic_resonances", cached)
+        circuit.__dict__["_periodic_resonances"] = cached     # a memo (never pickled)
     return [r for r in cached[1] if r[0] <= omega_max]
 
 

@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 import scipy.linalg as la
 
+from .._memo import Memos
 from ..circuit import Circuit, Element
 from ..errors import MechcircError, TopologyError
 
@@ -40,7 +41,7 @@ MAX_NODES = 2000
 
 
 @dataclass(frozen=True, eq=False)
-class StateSpace:
+class StateSpace(Memos):
     """ż = A z + B u; x = Cx z + Dx u; v = Cv z + Dv u + Ev u̇ (node-space, ``nodes`` order).
 
     ``kind`` is the drive's kind (``"velocity"``, ``"force"`` or ``None``); ``g``
