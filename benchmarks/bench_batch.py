@@ -47,7 +47,6 @@ import argparse
 import os
 import platform
 import sys
-import time
 from pathlib import Path
 
 if "--no-numba" in sys.argv:
@@ -57,6 +56,7 @@ import numpy as np
 
 import mechcirc
 from mechcirc.batch import designs
+from timing import cpu
 
 NETLIST = Path(__file__).resolve().parents[1] / "netlists" / "stb_heald.mcir"
 OMEGA = np.geomspace(10.0, 1e4, 200)
@@ -222,15 +222,6 @@ def nodal_resonances(repeats, alone=100):
                   f"ms/design, one by one {1e3 * t_1:6.3f} ms/design ({part.size} designs), "
                   f"ratio {t_1 / t_b:5.1f}x; stacked {ds.size - res.single.size}/{ds.size}; "
                   f"kinds {'equal' if same else 'DIFFER'}, ω differs by {dw:.1e} (relative)")
-
-
-def cpu(fn, repeats):
-    times = []
-    for _ in range(repeats):
-        t0 = time.process_time()
-        out = fn()
-        times.append(time.process_time() - t0)
-    return float(np.median(times)), out
 
 
 def main():

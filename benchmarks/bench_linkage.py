@@ -37,6 +37,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 from linkage_reference import jac, phi  # noqa: E402  (Φ and its Jacobian, written out)
+from timing import wall  # noqa: E402
 
 FOURBAR_TOML = """
 name = "Mrázek beat-up four-bar"
@@ -55,16 +56,6 @@ rocker = ["D", "C"]
 link = "crank"
 omega = 100.0
 """
-
-
-def median_time(fn, repeat=5):
-    """Median of ``repeat`` runs [s]."""
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return float(np.median(times))
 
 
 CPU = {}
@@ -214,10 +205,10 @@ def main() -> None:
     t_closed2, t_newton4 = interleaved(lambda: fb.evaluate(theta),
                                        lambda: lk4.motion(theta, method="newton"), repeat=15,
                                        label="newton")
-    t_np4 = median_time(lambda: numpy_newton(lk4, theta), repeat=3)
+    t_np4 = wall(lambda: numpy_newton(lk4, theta), repeat=3)[0]
     n_old = 120
-    t_old4 = median_time(lambda: old_solve(lk4, theta[:n_old]), repeat=3) / n_old * 3600
-    t_solve4 = median_time(lambda: lk4.solve(theta), repeat=5)
+    t_old4 = wall(lambda: old_solve(lk4, theta[:n_old]), repeat=3)[0] / n_old * 3600
+    t_solve4 = wall(lambda: lk4.solve(theta), repeat=5)[0]
     m = lk4.motion(theta)
     ref = old_solve(lk4, theta[:n_old])
     st = fb.evaluate(theta)
@@ -253,18 +244,18 @@ def main() -> None:
     print("\nFNF six-bar (class-III group: Newton), one turn of crank 1")
     for n in (360, 3600):
         th = np.linspace(0.0, 2 * math.pi, n, endpoint=False)
-        t_new = median_time(lambda: six.motion(th), repeat=9)
-        t_sol = median_time(lambda: six.solve(th), repeat=9)
-        t_np = median_time(lambda: numpy_newton(six, th), repeat=3)
+        t_new = wall(lambda: six.motion(th), repeat=9)[0]
+        t_sol = wall(lambda: six.solve(th), repeat=9)[0]
+        t_np = wall(lambda: numpy_newton(six, th), repeat=3)[0]
         print(f"  {n:5d} positions: motion {t_new / n * 1e6:6.1f} µs per position "
               f"(goal ≤ 50), solve {t_sol / n * 1e6:6.1f} µs; batched numpy Newton "
               f"{t_np / n * 1e6:6.1f} µs")
     n_ref = 60
     th = np.linspace(0.0, 2 * math.pi, 360, endpoint=False)[:n_ref]
-    t_old6 = median_time(lambda: old_solve(six, th), repeat=3) / n_ref
-    t_fs6 = median_time(lambda: old_solve(six, th, use_fsolve=True), repeat=3) / n_ref
-    t_new6 = median_time(lambda: six.solve(np.linspace(0.0, 2 * math.pi, 360,
-                                                       endpoint=False)), repeat=3) / 360
+    t_old6 = wall(lambda: old_solve(six, th), repeat=3)[0] / n_ref
+    t_fs6 = wall(lambda: old_solve(six, th, use_fsolve=True), repeat=3)[0] / n_ref
+    t_new6 = wall(lambda: six.solve(np.linspace(0.0, 2 * math.pi, 360,
+                                                endpoint=False)), repeat=3)[0] / 360
     q_new = six.motion(th).q
     q_fs = old_solve(six, th, use_fsolve=True)
     print(f"  old path {t_old6 * 1e6:7.0f} µs, fsolve + analytic Jacobian {t_fs6 * 1e6:7.0f} µs "

@@ -49,10 +49,10 @@ import os
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
+from timing import cpu
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -106,15 +106,6 @@ def child_cpu(variant, argv, env_extra, repeat):
     return float(np.median(times))
 
 
-def cpu_median(fn, repeat):
-    times = []
-    for _ in range(repeat):
-        c0 = time.process_time()
-        fn()
-        times.append(time.process_time() - c0)
-    return float(np.median(times))
-
-
 def linkages():
     from mechcirc.kinematics import load_linkage
     from mechcirc.scene import load_scene
@@ -153,8 +144,8 @@ def solve_table(sizes, repeat):
                 for backend in ("numpy", "python", "compiled"):
                     use(backend)
                     lk.motion(th[:3], method="newton")      # imports, compile or cache load
-                    row[backend] = cpu_median(lambda lk=lk, th=th: lk.motion(th, method="newton"),
-                                              repeat)
+                    row[backend] = cpu(lambda lk=lk, th=th: lk.motion(th, method="newton"),
+                                       repeat)[0]
                     out[backend] = lk.motion(th, method="newton")
                 a, b = out["python"], out["numpy"]
                 dq = np.max(np.abs(a.q - b.q)) / lk.length_scale()

@@ -31,7 +31,6 @@ from __future__ import annotations
 import argparse
 import statistics
 import sys
-import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -40,12 +39,7 @@ import mechcirc  # noqa: E402
 from bench_nodal_speed import grid  # noqa: E402
 from mechcirc.modes import modes  # noqa: E402
 from mechcirc.resonances import resonance_pairs  # noqa: E402
-
-
-def cpu(fn):
-    t0 = time.process_time()
-    out = fn()
-    return time.process_time() - t0, out
+from timing import cpu
 
 
 def compare(label: str, text: str, repeat: int, before=None) -> None:

@@ -41,7 +41,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_sp_sweep import ladder_netlist, ladder_numbers  # noqa: E402
-from bench_sp_sweep import median_time as cpu  # noqa: E402
+from timing import cpu  # noqa: E402
 
 import mechcirc  # noqa: E402
 from mechcirc import _jit, nodal  # noqa: E402
@@ -163,7 +163,7 @@ def run(n_el, omega, repeats):
         abn[:] = a0
         floor_node(abn, kl, rp, xn)
     node()
-    t_copy = cpu(lambda: abn.__setitem__(slice(None), a0), repeats)
+    t_copy = cpu(lambda: abn.__setitem__(slice(None), a0), repeats)[0]
     kv = 2 * kl
     if kl == 1:
         diag = np.ascontiguousarray(a0[:, :, kv].T)
@@ -181,18 +181,18 @@ def run(n_el, omega, repeats):
             floor_omega(*parts)
         omega_fn()
         xo = (parts[6] + 1j * parts[7]).T
-        t_oc = cpu(lambda: [p.__setitem__(slice(None), z) for p, z in zip(parts, srcs)], repeats)
+        t_oc = cpu(lambda: [p.__setitem__(slice(None), z) for p, z in zip(parts, srcs)], repeats)[0]
     xp = x[:, sol.p]
     err_node = np.max(np.abs(xn - xp) / np.max(np.abs(xp), axis=1, keepdims=True))
     per = 1e9 / (n * nw)
-    out = {"factor (A formed + LU, 401 ω in one call)": cpu(factor_all, repeats),
-           f"factor in the sweep's chunks ({chunk} ω)": cpu(factor_chunks, repeats),
-           "solve (one, 401 ω)": cpu(solve_all, repeats),
-           "residual in double-double (first pass)": cpu(residual, repeats),
-           "floor node-innermost LU + solve (copy out)": cpu(node, repeats) - t_copy}
+    out = {"factor (A formed + LU, 401 ω in one call)": cpu(factor_all, repeats)[0],
+           f"factor in the sweep's chunks ({chunk} ω)": cpu(factor_chunks, repeats)[0],
+           "solve (one, 401 ω)": cpu(solve_all, repeats)[0],
+           "residual in double-double (first pass)": cpu(residual, repeats)[0],
+           "floor node-innermost LU + solve (copy out)": cpu(node, repeats)[0] - t_copy}
     if kl == 1:
         out["floor ω-innermost LU + solve, re/im apart (copy out)"] = \
-            cpu(omega_fn, repeats) - t_oc
+            cpu(omega_fn, repeats)[0] - t_oc
         err_o = np.max(np.abs(xo - xp) / np.max(np.abs(xp), axis=1, keepdims=True))
     print(f"{n_el:,} elements: {n} unknowns, half band {kl}, {nw} ω; ns per unknown per ω "
           f"(CPU medians of {repeats}, load {os.getloadavg()[0]:.1f})")

@@ -51,16 +51,7 @@ from bench_sp_sweep import NgSpice, ladder_netlist, ladder_numbers, spice_lines 
 
 import mechcirc  # noqa: E402
 from mechcirc import _jit, nodal  # noqa: E402
-
-
-def cpu(fn, repeats):
-    """Median CPU time [s] of ``fn()`` and its last result."""
-    times, out = [], None
-    for _ in range(repeats):
-        t0 = time.process_time()
-        out = fn()
-        times.append(time.process_time() - t0)
-    return float(np.median(times)), out
+from timing import cpu
 
 
 def mp_ladder(ks, ms, r, omega):

@@ -41,7 +41,6 @@ import statistics
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
@@ -53,6 +52,7 @@ from mechcirc import _jit
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from reference.networks import grid_text  # noqa: E402
+from timing import cpu
 
 
 grid = grid_text       # the tests' grid (tests/reference/networks.py)
@@ -146,12 +146,6 @@ def bare(system, omega):
     return out
 
 
-def timed(fn):
-    t0 = time.process_time()
-    out = fn()
-    return time.process_time() - t0, out
-
-
 def run(name, text, spice, omega, repeat, *, spice_points=None, floor=True):
     """Time the floor, ngspice and mechcirc on one network; print the table row."""
     system = mechcirc.parse(text).nodal
@@ -181,7 +175,7 @@ def run(name, text, spice, omega, repeat, *, spice_points=None, floor=True):
     results = {}
     for _ in range(repeat):                     # interleaved
         for k, fn in runs.items():
-            t, out = timed(fn)
+            t, out = cpu(fn)
             if k == "ngspice -b":
                 t, out = out[0], out[1]
             elif k == "splu per ω":

@@ -22,7 +22,6 @@ from __future__ import annotations
 import argparse
 import statistics
 import sys
-import time
 from pathlib import Path
 
 import scipy.linalg as la
@@ -33,16 +32,11 @@ import mechcirc  # noqa: E402
 from mechcirc import resonances  # noqa: E402
 from bench_nodal_speed import grid  # noqa: E402
 from reference.networks import damped_ladder_lines  # noqa: E402
+from timing import cpu
 
 
 def damped_ladder(n_el: int, seed: int = 0, r: float = 1e-3) -> str:
     return "\n".join(damped_ladder_lines(n_el, seed, r))
-
-
-def cpu(fn):
-    t0 = time.process_time()
-    out = fn()
-    return time.process_time() - t0, out
 
 
 def main() -> None:

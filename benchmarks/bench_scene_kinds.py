@@ -35,27 +35,16 @@ from __future__ import annotations
 
 import argparse
 import os
-import statistics
-import time
 import warnings
 from pathlib import Path
 
 import numpy as np
+from timing import cpu
 
 ROOT = Path(__file__).resolve().parents[1]
 SPP = {"rk4": (6.25, 12.5, 25.0, 50.0, 100.0, 200.0, 400.0, 800.0),
        "rk8": (4.0, 6.0, 8.0, 12.0, 16.0, 25.0, 50.0, 100.0)}
 RTOLS = (1e-6, 1e-8, 1e-10, 1e-12)
-
-
-def cpu(fn, repeat):
-    """(median CPU seconds, last result) of ``fn()`` over ``repeat`` calls."""
-    times, out = [], None
-    for _ in range(repeat):
-        t0 = time.process_time()
-        out = fn()
-        times.append(time.process_time() - t0)
-    return statistics.median(times), out
 
 
 def force_error(run, ref) -> float:

@@ -26,9 +26,7 @@ Run from the repository root: ``python benchmarks/bench_shaft.py [--repeat N]``.
 import argparse
 import importlib.util
 import os
-import statistics
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -39,6 +37,7 @@ sys.path[:0] = [str(ROOT / "tests" / "scene"), str(ROOT / "tests")]
 import mechcirc._jit as jit  # noqa: E402
 from mechcirc.scene import parse_scene  # noqa: E402
 from mechcirc.scene.shaft import simulate_shaft, warm_up  # noqa: E402
+from timing import cpu  # noqa: E402
 
 
 def sley():
@@ -61,16 +60,6 @@ def cases():
              (8, 16, 32, 100)),
             ("slider-crank, 2 µm dead zone", gap.gap_scene, {}, (8, 12, 16, 24, 32),
              (50, 100, 200))]
-
-
-def timed(fn, repeat):
-    """(last result, median CPU seconds of ``repeat`` runs)."""
-    times = []
-    for _ in range(repeat):
-        t = time.process_time()
-        out = fn()
-        times.append(time.process_time() - t)
-    return out, statistics.median(times)
 
 
 def main(argv=None):
@@ -99,7 +88,7 @@ def main(argv=None):
         runs += [("rk4", f"{s} steps/period", dict(method="rk4", steps_per_period=s))
                  for s in spp4]
         for method, setting, opts in runs:
-            r, t = timed(lambda opts=opts, scene=scene, kw=kw: simulate_shaft(
+            t, r = cpu(lambda opts=opts, scene=scene, kw=kw: simulate_shaft(
                 scene, points=360, startup=False, **opts, **kw), args.repeat)
             err = float(np.max(np.abs(r.speed - ref.speed))) / ref.omega_mean
             rows.append((method, setting, t, err))

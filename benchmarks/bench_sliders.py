@@ -21,13 +21,13 @@ Run:  python benchmarks/bench_sliders.py
 from __future__ import annotations
 
 import math
-import time
 from pathlib import Path
 
 import numpy as np
 
 from mechcirc import _jit
 from mechcirc.kinematics import load_linkage, parse_linkage
+from timing import wall
 
 ROOT = Path(__file__).resolve().parents[1]
 R, L, E = 40.0, 150.0, 10.0
@@ -54,15 +54,6 @@ omega = 10.0
 """
 
 
-def median_time(fn, repeat=7):
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return float(np.median(times))
-
-
 def closed_form(th, w=10.0):
     h, h1, h2 = R * np.sin(th) + E, R * np.cos(th), -R * np.sin(th)
     S = np.sqrt(L * L - h * h)
@@ -84,12 +75,12 @@ def main() -> None:
                 return lk.motion(th, method=method).points
             _jit.COMPILED = None
             run(method="newton")                   # compile / load the cache once
-            dyads = median_time(run) if lk.solver == "dyads" else math.nan
-            fast = median_time(lambda run=run: run(method="newton"))
+            dyads = wall(run, 7)[0] if lk.solver == "dyads" else math.nan
+            fast = wall(lambda run=run: run(method="newton"), 7)[0]
             _jit.COMPILED = False
-            slow = median_time(lambda run=run: run(method="newton"), 3)
+            slow = wall(lambda run=run: run(method="newton"), 3)[0]
             _jit.COMPILED = None
-            floor = median_time(lambda th=th: closed_form(th)) if name == "slider-crank" \
+            floor = wall(lambda th=th: closed_form(th), 7)[0] if name == "slider-crank" \
                 else None
             extra = f"{floor / N * 1e6:10.2f}" if floor is not None else ""
             print(f"{name:<18} {N:6d} {dyads / N * 1e6:10.1f} {fast / N * 1e6:17.1f} "

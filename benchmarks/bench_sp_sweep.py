@@ -48,6 +48,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 from mechcirc.reduction import evaluate  # noqa: E402
 from reference import sp_corpus  # noqa: E402
+from timing import cpu
 
 
 def floor_ladder(ks, ms, r, omega):
@@ -59,17 +60,6 @@ def floor_ladder(ks, ms, r, omega):
         Y = jw * m + (r if K is None else 1.0 / K)
         K = jw * k_inv + 1.0 / Y
     return K
-
-
-def median_time(fn, repeats):
-    """Median CPU time [s] of ``fn()`` (process time: the machine is shared, and
-    wall time counts the moments another process has the core)."""
-    times = []
-    for _ in range(repeats):
-        t0 = time.process_time()
-        fn()
-        times.append(time.process_time() - t0)
-    return float(np.median(times))
 
 
 def bench_reduce() -> int:
@@ -130,9 +120,9 @@ def bench_floor(args) -> int:
             K_sp = evaluate(tree, omega)
             diff = float(np.max(np.abs(K_sp - K_floor) / np.abs(K_floor)))
             evaluate(tree, omega, error=True)
-            t_floor = median_time(lambda: floor_ladder(ks, ms, 1e-3, omega), repeats)
-            t_sp = median_time(lambda: evaluate(tree, omega), repeats)
-            t_err = median_time(lambda: evaluate(tree, omega, error=True), repeats)
+            t_floor = cpu(lambda: floor_ladder(ks, ms, 1e-3, omega), repeats)[0]
+            t_sp = cpu(lambda: evaluate(tree, omega), repeats)[0]
+            t_err = cpu(lambda: evaluate(tree, omega, error=True), repeats)[0]
             times[path] = (t_floor, t_sp, t_err, diff)
         _jit.COMPILED = None
         tf, ts, te, diff = times.get(True, (np.nan,) * 4)
@@ -245,11 +235,11 @@ def bench_e2e(args) -> int:
             return s.K, s.flags
 
         K = mech_K()
-        t_k = median_time(mech_K, args.repeats)
-        t_f = median_time(mech_flags, args.repeats)
+        t_k = cpu(mech_K, args.repeats)[0]
+        t_f = cpu(mech_flags, args.repeats)[0]
         # The numpy path: what a fresh process gets below KERNEL_MIN_WORK.
         _jit.COMPILED = False
-        t_n = median_time(mech_flags, args.repeats)
+        t_n = cpu(mech_flags, args.repeats)[0]
         _jit.COMPILED = None
         if spice is not None:
             lines = spice_lines(ks, ms)
@@ -257,7 +247,7 @@ def bench_e2e(args) -> int:
             # ngspice's AC solve can return NaN at a point (999 elements: one of 401).
             nan_spice = int(np.count_nonzero(~np.isfinite(K_sp)))
             diff = float(np.nanmax(np.abs(K - K_sp) / np.abs(K)))
-            t_s = median_time(lambda: spice.ac(lines), args.repeats)
+            t_s = cpu(lambda: spice.ac(lines), args.repeats)[0]
         else:
             t_s, diff, nan_spice = np.nan, np.nan, 0
         print(f"| {2 * len(ks) + 1} | {t_k * 1e3:.2f} | {t_f * 1e3:.2f} | {t_n * 1e3:.2f} "
