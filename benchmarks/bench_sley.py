@@ -26,24 +26,13 @@ import platform
 import subprocess
 import sys
 import tempfile
-import time
 import warnings
 
 import numpy as np
+from timing import cpu, wall
 
 VARIANT = ("one-side", 3)
 REVS = 5
-
-
-def timed(fn, repeat, clock=time.process_time):
-    """(median time of ``repeat`` calls, last result); CPU time of this process by default
-    (steadier than the wall clock on a shared machine), the wall clock for the batch."""
-    times, out = [], None
-    for _ in range(repeat):
-        t0 = clock()
-        out = fn()
-        times.append(clock() - t0)
-    return float(np.median(times)), out
 
 
 def errors(res, ref):
@@ -94,11 +83,11 @@ def main() -> None:
     simulate(drive, variant, 1)                      # warm: compile / load cache once
     simulate(drive, variant, 1, method="DOP853", rtol=1e-3, error_estimate=False)
     # the goal's baseline: one DOP853 run at rtol 1e-8 (no error estimate of its own)
-    t_ref, ref = timed(lambda: simulate(drive, variant, REVS, method="DOP853", rtol=1e-10,
+    t_ref, ref = cpu(lambda: simulate(drive, variant, REVS, method="DOP853", rtol=1e-10,
                                         error_estimate=False), 1)
-    t_base, base = timed(lambda: simulate(drive, variant, REVS, method="DOP853", rtol=1e-8,
+    t_base, base = cpu(lambda: simulate(drive, variant, REVS, method="DOP853", rtol=1e-8,
                                           error_estimate=False), 3)
-    t_def, res = timed(lambda: simulate(drive, variant, REVS), 20)
+    t_def, res = cpu(lambda: simulate(drive, variant, REVS), 20)
     return rest(args, drive, variant, t_ref, ref, t_base, base, t_def, res, simulate,
                 simulate_batch)
 
@@ -132,12 +121,12 @@ def rest(args, drive, variant, t_ref, ref, t_base, base, t_def, res, simulate, s
 
     rows = []
     for spp in (20, 30, 40, 50, 80, 120, 200):
-        t, r = timed(lambda spp=spp: simulate(drive, variant, REVS, steps_per_period=spp), 10)
+        t, r = cpu(lambda spp=spp: simulate(drive, variant, REVS, steps_per_period=spp), 10)
         rows.append(("rk4 numba", f"{spp} steps/period", t, r.nfev, errors(r, ref)))
     rows.append(("rk4 numba", "default", t_def, res.nfev, e_def))
     # rk8 (DOP853's 8th-order formula at a fixed step, quintic output), with its estimate
     for spp in (4, 6, 8, 12, 16, None):
-        t, r = timed(lambda spp=spp: simulate(drive, variant, REVS, method="rk8",
+        t, r = cpu(lambda spp=spp: simulate(drive, variant, REVS, method="rk8",
                                               steps_per_period=spp), 10)
         e = errors(r, ref)
         rows.append(("rk8 numba", "default" if spp is None else f"{spp} steps/period", t,
@@ -145,7 +134,7 @@ def rest(args, drive, variant, t_ref, ref, t_base, base, t_def, res, simulate, s
         print(f"rk8 {rows[-1][1]}: {t_base / t:.0f}x the baseline, peak error "
               f"{max(e['eps4P'], e['M2V']):.1e}, its estimate {r.error_estimate:.1e}"
               f" ({'bounds' if r.error_estimate >= max(e.values()) else 'BELOW'} the error)")
-    t, r = timed(lambda: simulate(drive, variant, REVS, method="rk4-python"), 1)
+    t, r = cpu(lambda: simulate(drive, variant, REVS, method="rk4-python"), 1)
     rows.append(("rk4 python", "default", t, r.nfev, errors(r, ref)))
     for method, tols in (("DOP853", (1e-6, 1e-8, 1e-10)), ("RK45", (1e-6, 1e-8)),
                          ("LSODA", (1e-6, 1e-8))):
@@ -155,7 +144,7 @@ def rest(args, drive, variant, t_ref, ref, t_base, base, t_def, res, simulate, s
             elif method == "DOP853" and tol == 1e-8:
                 t, r = t_base, base
             else:
-                t, r = timed(lambda m=method, tol=tol: simulate(drive, variant, REVS, method=m,
+                t, r = cpu(lambda m=method, tol=tol: simulate(drive, variant, REVS, method=m,
                                                                 rtol=tol, error_estimate=False),
                              1)
             rows.append((method, f"rtol {tol:g}", t, r.nfev, errors(r, ref)))
@@ -166,9 +155,8 @@ def rest(args, drive, variant, t_ref, ref, t_base, base, t_def, res, simulate, s
               f"{e['eps4P']:>10.1e} {e['M2V']:>10.1e} {e['eps2P']:>10.1e}")
 
     for revs in () if args.no_batch else (REVS, 100):
-        t_seq, _ = timed(lambda revs=revs: simulate_batch(revolutions=revs, processes=1), 1,
-                         time.perf_counter)
-        t_par, _ = timed(lambda revs=revs: simulate_batch(revolutions=revs), 1, time.perf_counter)
+        t_seq, _ = wall(lambda revs=revs: simulate_batch(revolutions=revs, processes=1))
+        t_par, _ = wall(lambda revs=revs: simulate_batch(revolutions=revs))
         print(f"batch, 14 presets x {revs} revolutions: one by one {t_seq:.2f} s, "
               f"simulate_batch on {os.cpu_count()} cores {t_par:.2f} s "
               f"(process start-up and numba cache loads included)")
