@@ -18,14 +18,12 @@ import sys
 import time
 
 import numpy as np
+from timing import samples
 
 
 def best_of(fn, repeat=50):
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
+    """(least, median) wall seconds of ``repeat`` calls of ``fn()``."""
+    times, _ = samples(fn, repeat, time.perf_counter)
     return min(times), float(np.median(times))
 
 

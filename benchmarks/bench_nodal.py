@@ -18,21 +18,12 @@ Run from the repository root: ``python benchmarks/bench_nodal.py``.
 
 from __future__ import annotations
 
-import time
 
 import numpy as np
 
 import mechcirc
 from mechcirc.adaptive import adaptive_sweep
-
-
-def best_of(fn, repeat=3):
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t0)
-    return min(times), out
+from timing import wall
 
 
 def cross_chain(n_nodes: int) -> str:
@@ -79,13 +70,13 @@ def main() -> None:
     circuit = mechcirc.parse(cross_chain(n_nodes))
     n_el = len(circuit.elements)
     omega = np.geomspace(10, 1e3, 1000)
-    t_nodal, s = best_of(lambda: circuit.sweep(omega, method="nodal"), repeat=3)
-    t_fast, s_fast = best_of(
-        lambda: mechcirc.nodal.mobility_unrefined(circuit.nodal, omega), repeat=3)
+    t_nodal, s = wall(lambda: circuit.sweep(omega, method="nodal"), repeat=3, best=True)
+    t_fast, s_fast = wall(
+        lambda: mechcirc.nodal.mobility_unrefined(circuit.nodal, omega), repeat=3, best=True)
     subset = omega[::125]
     try:
-        t_skrf_half, _ = best_of(lambda: skrf_network(circuit, subset[::2]), repeat=1)
-        t_skrf, net = best_of(lambda: skrf_network(circuit, subset), repeat=1)
+        t_skrf_half, _ = wall(lambda: skrf_network(circuit, subset[::2]), repeat=1, best=True)
+        t_skrf, net = wall(lambda: skrf_network(circuit, subset), repeat=1, best=True)
     except ImportError:
         print("(a) scikit-rf not installed: pip install scikit-rf")
     else:
@@ -116,7 +107,7 @@ def main() -> None:
         lines.append(f"spring k{i} n{i} {f'n{i + 1}' if i < N else '0'} 100")
     chain = mechcirc.parse("\n".join(lines))
     chain.tree
-    t_res, found = best_of(lambda: mechcirc.parse("\n".join(lines)).resonances(), repeat=3)
+    t_res, found = wall(lambda: mechcirc.parse("\n".join(lines)).resonances(), repeat=3, best=True)
     j = np.arange(1, N + 1)
     held = 20 * np.sin(j * np.pi / (2 * (N + 1)))
     res = np.array([r.omega for r in found if r.kind == "resonance"])
@@ -143,7 +134,7 @@ def main() -> None:
         return all(q[(result.omega >= lo) & (result.omega <= hi)].max(initial=0) >= 0.99 * p
                    for (lo, hi), p in zip(windows, dense))
 
-    t_ad, ad = best_of(lambda: adaptive_sweep(c, 10, 1e4), repeat=1)
+    t_ad, ad = wall(lambda: adaptive_sweep(c, 10, 1e4), repeat=1, best=True)
     n_uniform = None
     for n in np.unique(np.geomspace(100, 400000, 60).astype(int)):
         if all(resolved(c.sweep(np.geomspace(10, 1e4, m))) for m in range(n, n + 5)):

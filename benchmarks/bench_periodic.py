@@ -17,7 +17,6 @@ The script prints; it asserts nothing.  Run from the repository root::
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 import numpy as np
@@ -25,18 +24,10 @@ import numpy as np
 from mechcirc import load
 from mechcirc.motion_laws import cam_cycle
 from mechcirc.periodic import periodic, rpm_to_omega, speed_map
+from timing import cpu
 
 ROOT = Path(__file__).resolve().parents[1]
 MOTION = cam_cycle("cycloidal", 120, 60, 120, 0.1)
-
-
-def best_of(fn, repeats):
-    best, result = float("inf"), None
-    for _ in range(repeats):
-        t0 = time.process_time()
-        result = fn()
-        best = min(best, time.process_time() - t0)
-    return best, result
 
 
 def by_hand(circuit, rpm, n=50, samples=4096):
@@ -62,24 +53,24 @@ def main():
 def bench(path):
     c = load(path)
     periodic(c, 600, motion=MOTION, harmonics=50)            # start-up
-    t_p, r = best_of(lambda: periodic(c, 600, motion=MOTION, harmonics=50), 20)
-    t_h, q = best_of(lambda: by_hand(c, 600), 3)
+    t_p, r = cpu(lambda: periodic(c, 600, motion=MOTION, harmonics=50), 20, best=True)
+    t_h, q = cpu(lambda: by_hand(c, 600), 3, best=True)
     diff = np.max(np.abs(q - r.Q)) / r.peak
     print(f"{path.name}: periodic 600 rpm, 50 harmonics: {t_p * 1e3:.2f} ms CPU "
           f"(goal 5 ms); by hand (sweep per harmonic): {t_h * 1e3:.1f} ms; "
           f"ratio {t_h / t_p:.1f}x; same Q within {diff:.1e} of the peak "
           f"(estimated error of the 50-harmonic sum: {r.error:.1e})")
-    t_d, r = best_of(lambda: periodic(c, 600, motion=MOTION), 5)
+    t_d, r = cpu(lambda: periodic(c, 600, motion=MOTION), 5, best=True)
     print(f"  periodic 600 rpm, harmonics for the default error 1e-4: {r.harmonics} "
           f"harmonics, {t_d * 1e3:.2f} ms CPU")
     speed_map(c, 100, 1200, 200, motion=MOTION, harmonics=50)     # start-up
-    t_m, m = best_of(lambda: speed_map(c, 100, 1200, 200, motion=MOTION, harmonics=50), 3)
+    t_m, m = cpu(lambda: speed_map(c, 100, 1200, 200, motion=MOTION, harmonics=50), 3, best=True)
     rpms = np.linspace(100, 1200, 200)
-    t_l, _ = best_of(lambda: [periodic(c, float(x), motion=MOTION, harmonics=50)
-                              for x in rpms], 1)
+    t_l, _ = cpu(lambda: [periodic(c, float(x), motion=MOTION, harmonics=50)
+                          for x in rpms], 1, best=True)
     print(f"  speed map 200 speeds, 50 harmonics: {t_m * 1e3:.1f} ms CPU (goal 200 ms); "
           f"200 periodic calls: {t_l * 1e3:.0f} ms; ratio {t_l / t_m:.1f}x")
-    t_a, m = best_of(lambda: speed_map(c, 100, 1200, 200, motion=MOTION), 1)
+    t_a, m = cpu(lambda: speed_map(c, 100, 1200, 200, motion=MOTION), 1, best=True)
     print(f"  speed map 200 speeds, default error 1e-4 ({m.harmonics.min()} .. "
           f"{m.harmonics.max()} harmonics): {t_a * 1e3:.0f} ms CPU")
 

@@ -33,18 +33,9 @@ from pathlib import Path
 import numpy as np
 
 import mechcirc
+from timing import wall
 
 NETLIST = Path(__file__).resolve().parents[1] / "netlists" / "stb_heald.mcir"
-
-
-def best_of(fn, repeats):
-    """Smallest wall time of ``repeats`` calls of ``fn`` [s], and the last result."""
-    best, result = float("inf"), None
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        result = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, result
 
 
 # --------------------------------------------------------------------------
@@ -203,8 +194,8 @@ def bench_refine(repeats):
         c.sweep(omega[:2], method="nodal")          # pattern, solver and kernels built once
         times = {}
         for refine in (True, False):
-            times[refine], times[refine, "s"] = best_of(
-                lambda r=refine: c.sweep(omega, method="nodal", refine=r), repeats)
+            times[refine], times[refine, "s"] = wall(
+                lambda r=refine: c.sweep(omega, method="nodal", refine=r), repeats, best=True)
         a, b = times[True, "s"], times[False, "s"]
         with np.errstate(all="ignore"):
             diff = np.nanmax(np.abs(b.K - a.K) / np.abs(a.K))
