@@ -126,7 +126,6 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
     notes = list(ss.initial[1])
     u = drive.sample(t, amp)
     ss, z0, u_in = _start(ss, drive, amp, u, steady, circuit, linearise, notes)
-    _flags(elements=elements, velocities=velocities)
     if backlash_elements(circuit) and not linearise:
         return _clearance_run(ss, circuit, z0, t, (u, u_in), drive, amp, rtol, notes,
                               elements, velocities)
@@ -143,6 +142,7 @@ def _flags(**flags) -> None:
 
 def _clearance_run(ss, circuit, z0, t, us, drive, amp, rtol, notes, elements, velocities):
     """A run with clearances: the adaptive integrator, its outputs and separations."""
+    _flags(elements=elements, velocities=velocities)
     if not RTOL_RANGE[0] <= rtol <= RTOL_RANGE[1]:
         raise MechcircError(f"--rtol must be between {RTOL_RANGE[0]:g} and "
                             f"{RTOL_RANGE[1]:g}, got {rtol:g}")
@@ -161,6 +161,7 @@ def _clearance_run(ss, circuit, z0, t, us, drive, amp, rtol, notes, elements, ve
 
 def _linear_run(ss, circuit, z0, t, us, drive, notes, elements, velocities):
     """A linear run: exact propagation, its outputs and their error."""
+    _flags(elements=elements, velocities=velocities)
     u, u_in = us
     h = t[1] - t[0]
     Z, T, nx, drive_y, x_ready, v_ready, x_bound, err, path = propagate_linear(
