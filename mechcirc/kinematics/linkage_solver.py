@@ -925,10 +925,10 @@ def _pack(r, phi):
 
 
 def _dyad_solver(lk, pl):
-    ds = pl.cache.get("dyads")
-    if ds is None:
-        ds = pl.cache["dyads"] = _DyadSolver(lk, pl)
-    return ds
+    """The plan's :class:`_DyadSolver`, made on first use."""
+    if "dyads" not in pl.cache:
+        pl.cache["dyads"] = _DyadSolver(lk, pl)
+    return pl.cache["dyads"]
 
 
 def _solve_dyads(lk, pl, t, dt_max, cross=(), zones=()):
@@ -1109,13 +1109,11 @@ class Newton:
             iw = 1j * w
             for k in range(self.ns):
                 row, a, b = 2 * self.m + k, pl.ga[k], pl.gb[k]
-                J[:, row, 3 * b] = iw[:, k].real
-                J[:, row, 3 * b + 1] = iw[:, k].imag
-                J[:, row, 3 * b + 2] = _dot(w[:, k], RB[:, k])
+                J[:, row, 3 * b:3 * b + 3] = np.stack(
+                    [iw[:, k].real, iw[:, k].imag, _dot(w[:, k], RB[:, k])], axis=-1)
                 if a < pl.nb:
-                    J[:, row, 3 * a] = -iw[:, k].real
-                    J[:, row, 3 * a + 1] = -iw[:, k].imag
-                    J[:, row, 3 * a + 2] = -_dot(w[:, k], d[:, k] + RA[:, k])
+                    J[:, row, 3 * a:3 * a + 3] = -np.stack(
+                        [iw[:, k].real, iw[:, k].imag, _dot(w[:, k], d[:, k] + RA[:, k])], axis=-1)
         return J
 
     def gamma(self, q, qdot, sides=None):
