@@ -285,8 +285,7 @@ class Linkage:
         return tuple(groups)
 
     def _index(self):
-        names = self.link_names
-        return {n: i for i, n in enumerate(names)}
+        return {n: i for i, n in enumerate(self.link_names)}
 
     def local_offsets(self) -> dict[str, dict[str, NDArray[np.float64]]]:
         """link → {point: pose offset from the link's first point} [m]."""

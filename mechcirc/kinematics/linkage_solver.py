@@ -300,9 +300,8 @@ def plan(lk) -> _Plan:
     _Plan
         Dyads, or Newton's method when the structure has no dyad order.
     """
-    names = lk.link_names
-    idx = {n: i for i, n in enumerate(names)}
-    nb = len(names)
+    idx = lk._index()
+    nb = len(idx)
     local = lk.local_offsets()
     points = tuple(lk.pose)
     crank_idx = np.array([idx[c.link] for c in lk.cranks])
