@@ -379,8 +379,7 @@ class Linkage:
             As :meth:`motion`, which this wraps.
         """
         scalar = np.ndim(theta) == 0
-        m = self.motion(theta, max_step_deg=max_step_deg, method=method)
-        out = m.states()
+        out = self.motion(theta, max_step_deg=max_step_deg, method=method).states()
         return out[0] if scalar else out
 
     def assemble(self, crank_angles: dict, near: NDArray | None = None) -> dict:
