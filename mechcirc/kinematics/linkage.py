@@ -286,8 +286,7 @@ class Linkage(Memos):
         return tuple(groups)
 
     def _index(self):
-        names = self.link_names
-        return {n: i for i, n in enumerate(names)}
+        return {n: i for i, n in enumerate(self.link_names)}
 
     def local_offsets(self) -> dict[str, dict[str, NDArray[np.float64]]]:
         """link → {point: pose offset from the link's first point} [m]."""
@@ -381,8 +380,7 @@ class Linkage(Memos):
             As :meth:`motion`, which this wraps.
         """
         scalar = np.ndim(theta) == 0
-        m = self.motion(theta, max_step_deg=max_step_deg, method=method)
-        out = m.states()
+        out = self.motion(theta, max_step_deg=max_step_deg, method=method).states()
         return out[0] if scalar else out
 
     def assemble(self, crank_angles: dict, near: NDArray | None = None) -> dict:

@@ -300,9 +300,8 @@ def plan(lk) -> _Plan:
     _Plan
         Dyads, or Newton's method when the structure has no dyad order.
     """
-    names = lk.link_names
-    idx = {n: i for i, n in enumerate(names)}
-    nb = len(names)
+    idx = lk._index()
+    nb = len(idx)
     local = lk.local_offsets()
     points = tuple(lk.pose)
     crank_idx = np.array([idx[c.link] for c in lk.cranks])
@@ -631,7 +630,7 @@ def _sin2(ds, t, cross):
     """sin² of each RRR dyad's inner angle, and of the angle between an RRP dyad's rod
     and its guide, at times ``t`` (n_dyads, N); negative where it cannot assemble, +inf
     for RPR dyads.  Independent of the dyad's own side."""
-    inner = ds.positions(t, _signs(ds.pl, cross, t) if cross else None)[3]
+    inner = ds.positions(t, cross)[3]
     out = np.full((len(inner), len(t)), np.inf)
     for k, (dy, rates) in enumerate(zip(ds.pl.dyads, inner)):
         if dy.kind == "RRR":
@@ -817,10 +816,11 @@ class _DyadSolver:
                    float(np.angle(z3 - self.pose[P2])) if dy.kind == "RRR" else 0.0)
             self.geo.append((X1, X2, ang, -self.local[L1][P1], -self.local[L2][a2]))
 
-    def positions(self, t, signs=None):
-        """Every body at times ``t``; ``signs`` (n_dyads, N): each dyad's assembly side per
-        time (default: the pose's, :func:`_signs`)."""
+    def positions(self, t, cross=()):
+        """Every body at times ``t``, each dyad on its side of the change points ``cross``
+        passed (:func:`_signs`; none: the pose's side)."""
         pl, lk = self.pl, self.lk
+        signs = _signs(pl, cross, t) if cross else None
         N = len(t)
         E = np.ones((pl.nb + 1, N), dtype=complex)          # e^{iφ}; the ground last
         phi = np.zeros((pl.nb + 1, N))
@@ -925,18 +925,17 @@ def _pack(r, phi):
 
 
 def _dyad_solver(lk, pl):
-    ds = pl.cache.get("dyads")
-    if ds is None:
-        ds = pl.cache["dyads"] = _DyadSolver(lk, pl)
-    return ds
+    """The plan's :class:`_DyadSolver`, made on first use."""
+    if "dyads" not in pl.cache:
+        pl.cache["dyads"] = _DyadSolver(lk, pl)
+    return pl.cache["dyads"]
 
 
 def _solve_dyads(lk, pl, t, dt_max, cross=(), zones=()):
     """The dyads at times ``t``, each on its side of the change points ``cross`` passed
     (:func:`_signs`); the path outside ``zones`` must assemble."""
     ds = _dyad_solver(lk, pl)
-    signs = _signs(pl, cross, t) if cross else None
-    phi, E, r, inner, margin = ds.positions(t, signs)
+    phi, E, r, inner, margin = ds.positions(t, cross)
     # the traversal from the pose must stay assemblable: check the path between
     # the targets too where they are further apart than a continuation step
     nodes, _ = _path(t, dt_max)
@@ -944,7 +943,7 @@ def _solve_dyads(lk, pl, t, dt_max, cross=(), zones=()):
         check_t, check_m = t, margin
     else:
         check_t = nodes[1:]
-        check_m = ds.positions(check_t, _signs(pl, cross, check_t) if cross else None)[4]
+        check_m = ds.positions(check_t, cross)[4]
     for a, b in zones:          # inside a change point's zone it is not used (_bridged)
         check_m = np.where((check_t > a) & (check_t < b), np.inf, check_m)
     if not np.all(check_m > _SINGULAR):
@@ -983,8 +982,7 @@ def _lock_error(lk, ds, t_good, t_bad, cross=()):
         if abs(hi - lo) * abs(w1) < 1e-12:
             break
         grid = np.linspace(lo, hi, _LOCK_GRID + 2)[1:-1]
-        bad = ~(ds.positions(grid, _signs(ds.pl, cross, grid) if cross else None)[4]
-                > _SINGULAR)
+        bad = ~(ds.positions(grid, cross)[4] > _SINGULAR)
         if bad.any():
             k = int(np.argmax(bad))
             lo, hi = (grid[k - 1] if k else lo), grid[k]
@@ -1109,13 +1107,11 @@ class Newton:
             iw = 1j * w
             for k in range(self.ns):
                 row, a, b = 2 * self.m + k, pl.ga[k], pl.gb[k]
-                J[:, row, 3 * b] = iw[:, k].real
-                J[:, row, 3 * b + 1] = iw[:, k].imag
-                J[:, row, 3 * b + 2] = _dot(w[:, k], RB[:, k])
+                J[:, row, 3 * b:3 * b + 3] = np.stack(
+                    [iw[:, k].real, iw[:, k].imag, _dot(w[:, k], RB[:, k])], axis=-1)
                 if a < pl.nb:
-                    J[:, row, 3 * a] = -iw[:, k].real
-                    J[:, row, 3 * a + 1] = -iw[:, k].imag
-                    J[:, row, 3 * a + 2] = -_dot(w[:, k], d[:, k] + RA[:, k])
+                    J[:, row, 3 * a:3 * a + 3] = -np.stack(
+                        [iw[:, k].real, iw[:, k].imag, _dot(w[:, k], d[:, k] + RA[:, k])], axis=-1)
         return J
 
     def gamma(self, q, qdot, sides=None):
