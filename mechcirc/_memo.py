@@ -22,11 +22,13 @@ class Memos:
     def __getstate__(self):
         return {f.name: self.__dict__[f.name] for f in fields(self)}   # type: ignore[arg-type]
 
-    def memo(self, key: str, make: Callable[[], Any]) -> Any:
+    def memo(self, key: str, make: Callable[[], Any],
+             valid: Callable[[Any], bool] = lambda value: True) -> Any:
         """``make()``, kept on this object under ``key``: built by the first call, the same
-        object after.  For a module that caches what it derives from this object's
-        fields (a circuit's state-space model); like every memo, never pickled."""
+        object after while ``valid(it)`` holds (else built again).  For a module that
+        caches what it derives from this object's fields (a circuit's state-space model,
+        its resonances up to the largest ω asked); like every memo, never pickled."""
         memos = self.__dict__        # type: ignore[attr-defined]
-        if key not in memos:
+        if key not in memos or not valid(memos[key]):
             memos[key] = make()
         return memos[key]

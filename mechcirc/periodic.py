@@ -449,16 +449,14 @@ def _resonances(circuit, omega_max, notes):
     """(ωₙ, ζ, error) of the resonances (K = 0) up to ``omega_max``; a note if they cannot be had.
 
     Kept on the circuit (they do not depend on the speed), as its reduction is."""
-    cached = circuit.__dict__.get("_periodic_resonances")
-    if cached is None or cached[0] < omega_max:
-        try:
-            found = circuit.resonances(omega_max=omega_max)
-        except MechcircError as exc:
-            notes.append(f"resonances not computed ({exc}); harmonics are not named")
-            return []
-        cached = (omega_max, [(r.omega, r.zeta, r.error) for r in found
-                              if r.kind == "resonance"])
-        circuit.__dict__["_periodic_resonances"] = cached     # a memo (never pickled)
+    def make():
+        return omega_max, [(r.omega, r.zeta, r.error) for r in
+                           circuit.resonances(omega_max=omega_max) if r.kind == "resonance"]
+    try:
+        cached = circuit.memo("_periodic_resonances", make, lambda c: c[0] >= omega_max)
+    except MechcircError as exc:
+        notes.append(f"resonances not computed ({exc}); harmonics are not named")
+        return []
     return [r for r in cached[1] if r[0] <= omega_max]
 
 
