@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ._memo import Memos
 from .circuit import FRAME, Circuit, Element, Lever
 from .topology import check_frame_paths, force_groups, loaded_groups, node_names
 
@@ -38,7 +39,7 @@ __all__ = ["NodalSystem", "assemble", "stamps", "combine", "susceptance", "dense
 
 
 @dataclass(frozen=True, eq=False)
-class NodalSystem:
+class NodalSystem(Memos):
     """The nodal matrices of the loaded part of a circuit.
 
     Attributes
@@ -96,13 +97,13 @@ class NodalSystem:
         scipy.sparse.csr_matrix
             Shape (n, n), the stamps summed; built once.
         """
-        def build(system):
+        def build():
             import scipy.sparse as sp
 
-            r, c, v = system.stamps[kind]
-            return sp.csr_matrix((v, (r, c)), shape=(system.n, system.n))
+            r, c, v = self.stamps[kind]
+            return sp.csr_matrix((v, (r, c)), shape=(self.n, self.n))
 
-        return self.cached("_sparse_" + kind, build)
+        return self.memo("_sparse_" + kind, build)
 
     def dense(self, kind: str) -> NDArray[np.float64]:
         """The matrix of ``kind`` (as in :meth:`sparse`) as a dense (n, n) array, without
@@ -119,8 +120,8 @@ class NodalSystem:
         ndarray, shape (n, n)
             Shared between calls: not to be written to.
         """
-        return self.cached("_dense_" + kind,
-                           lambda s: s._summed(kind, False).reshape(s.n, s.n))
+        return self.memo("_dense_" + kind,
+                         lambda: self._summed(kind, False).reshape(self.n, self.n))
 
     def diagonal(self, kind: str) -> NDArray[np.float64]:
         """The diagonal of the matrix of ``kind`` (as in :meth:`sparse`), summed from the
@@ -151,12 +152,6 @@ class NodalSystem:
         on = r == c
         flat = np.bincount(r[on], v[on], n) if diagonal else np.bincount(r * n + c, v, n * n)
         return np.asarray(flat, dtype=float)            # (float already: no copy)
-
-    def cached(self, key: str, build):
-        """``build(self)``, built once per system and kept beside the fields under ``key``."""
-        if key not in self.__dict__:
-            object.__setattr__(self, key, build(self))
-        return self.__dict__[key]
 
     def injection(self) -> NDArray[np.float64]:
         """Right-hand side: unit force into node a, out of node b."""

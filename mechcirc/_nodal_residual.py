@@ -373,7 +373,7 @@ def _complex_omega_terms(m_h, m_l, k_h, k_l, w):
 
 def pattern(system: NodalSystem) -> Pattern:
     """The :class:`Pattern` of ``system``, built once per system."""
-    return system.cached("_pattern", Pattern)
+    return system.memo("_pattern", lambda: Pattern(system))
 
 
 def residual_rounding(system, S, double: bool = True):

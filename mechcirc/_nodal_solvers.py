@@ -179,22 +179,22 @@ def _csub_at(y, at, t) -> None:
 
 def dd_solver(system: NodalSystem) -> DDSolver:
     """The :class:`DDSolver` of ``system``, built once per system."""
-    return system.cached("_dd_solver", DDSolver)
+    return system.memo("_dd_solver", lambda: DDSolver(system))
 
 
 def solver(system: NodalSystem):
     """The solver of ``system`` (dense batch, banded or sparse), built once per system."""
-    def build(s):
-        if s.size > DENSE_LIMIT:
-            return SparseSolver(pattern(s))
+    def build():
+        if system.size > DENSE_LIMIT:
+            return SparseSolver(pattern(system))
         # Small: banded when the band is narrow (a ladder's is 1 wide: no n³
         # inverse per ω), otherwise dense.
-        if s.size >= SMALL_BAND[0]:
-            band = SparseSolver(pattern(s), SMALL_BAND[1])
+        if system.size >= SMALL_BAND[0]:
+            band = SparseSolver(pattern(system), SMALL_BAND[1])
             if band.kind == "band":
                 return band
-        return DenseSolver(s)
-    return system.cached("_solver", build)
+        return DenseSolver(system)
+    return system.memo("_solver", build)
 
 
 #: Systems of at most :data:`DENSE_LIMIT` unknowns are solved as bands from

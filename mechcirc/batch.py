@@ -37,6 +37,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ._memo import Memos
 from .circuit import Circuit, units_of
 from .errors import InputError, MechcircError, NotSeriesParallelError
 from ._sweep import (UNDAMPED_ZETA, real_omega, drive_force, drive_velocity, peak, point_flags,
@@ -239,7 +240,7 @@ def _build(circuit: Circuit, text, exprs, arrays: dict, D: int) -> "Designs":
 
 
 @dataclass(frozen=True, eq=False)
-class Designs:
+class Designs(Memos):
     """D designs of one circuit (see :func:`designs`): plain data, it pickles.
 
     Attributes
@@ -270,10 +271,6 @@ class Designs:
     amplitude: NDArray[np.float64]
     valid: NDArray[np.bool_]
     text: str | None = field(default=None, repr=False)
-    _plans: dict = field(default_factory=dict, init=False, repr=False, compare=False)
-
-    def __getstate__(self):
-        return {**self.__dict__, "_plans": {}}       # the plans are rebuilt, not shipped
 
     @property
     def size(self) -> int:
@@ -310,11 +307,16 @@ class Designs:
         """The template's plan with the values of designs ``which``, or None (not
         series–parallel); evaluated by the compiled kernel, or without it by numpy
         over the designs (:attr:`mechcirc.reduction.Plan.numpy`)."""
+        # The last designs' plan is kept (a memo, never pickled): sweep, extremes and
+        # resonances share it.
+        key = which.tobytes()
+        return self.memo("_plan", lambda: (key, self._plan(which)),
+                         lambda kept: kept[0] == key)[1]
+
+    def _plan(self, which: NDArray):
+        """:meth:`plan`, built."""
         from .reduction import plan
 
-        key = which.tobytes()
-        if key in self._plans:              # sweep, extremes and resonances share it
-            return self._plans[key]
         try:
             tree = self.circuit.tree
         except NotSeriesParallelError:
@@ -328,8 +330,6 @@ class Designs:
         p = replace(p.with_values(scaled, ratios), numpy=(
             tree, {e.name: scaled[i][:, None] for i, e in enumerate(p.leaves)},
             {lv.name: ratios[i][:, None] for i, lv in enumerate(p.levers)}))
-        self._plans.clear()
-        self._plans[key] = p
         return p
 
     def sweep(self, omega: ArrayLike) -> "DesignSweep":

@@ -865,7 +865,7 @@ def _g_and_delta(system, s: np.ndarray, pole: np.ndarray):
 
     # Anti-resonances on the held system (built once per system): 1/K = −q there, and A
     # is singular at the root while the held matrix is not.
-    systems = (system, system.cached("_held", nodal.held))
+    systems = (system, system.memo("_held", lambda: nodal.held(system)))
     return g_and_bound(pole, lambda i, want: nodal.evaluate_complex(systems[i], s[want]))
 
 

@@ -687,5 +687,5 @@ def test_a_springs_damping_expression_varies_per_design_and_designs_pickle():
     np.testing.assert_allclose(s.K, ref, rtol=1e-13)
     assert s.single.tolist() == [2]
     again = pickle.loads(pickle.dumps(ds))
-    assert again._plans == {} and ds._plans
+    assert "_plan" not in vars(again) and "_plan" in vars(ds)   # the plan is not shipped
     np.testing.assert_array_equal(again.sweep(w).K, s.K)

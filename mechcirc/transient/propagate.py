@@ -52,7 +52,7 @@ def drive_gain(ss: StateSpace, h: float, nt: int) -> float:
     N = ss.A.shape[0]
     if N == 0 or nt < 2:
         return float(np.abs(ss.Dx).max(initial=0.0))
-    plans = ss.__dict__.setdefault("_modal_plans", {})
+    plans = ss.memo("_modal_plans", dict)
     g = propagate_modal_x(ss.A, ss.B, ss.B, np.zeros(nt), h, ss.Cx, None, plans)[0]
     if g is not None:
         g = np.abs(g)
@@ -90,7 +90,7 @@ def propagate_linear(ss: StateSpace, z0, u_in, h, elements, velocities):
     x_only = velocities is False and not elements
     dmap = drive_map(ss)
     w = None if dmap is None else dmap[0]
-    plans = ss.__dict__.setdefault("_modal_plans", {})
+    plans = ss.memo("_modal_plans", dict)
     Z = T = nx = drive_y = x_ready = v_ready = x_bound = None
     if not elements:                    # node outputs only: block by block
         x_ready, v_ready, why, dropped, drive_y, x_bound = propagate_modal_x(
