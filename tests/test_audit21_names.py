@@ -296,14 +296,15 @@ def test_shaft_motion_frame_units_of_torsion_rods():
     bodies = ["crank1", "crank2", "coupler3", "link4", "coupler5", "output6", "shaft", "organ"]
     assert list(df.columns) == ["theta", "time", "speed", "acceleration", "motor_torque",
                                 "load_torque", *(f"{b}.acceleration" for b in bodies),
-                                "C1.force", "C1.deformation", "C6.force", "C6.deformation"]
+                                "eps_organ", "C1.force", "C1.deformation", "C6.force", "C6.deformation"]
     np.testing.assert_array_equal(df["speed"], m.speed)
     np.testing.assert_array_equal(df["organ.acceleration"], m.body_accelerations["organ"])
+    np.testing.assert_array_equal(df["eps_organ"], m.body_accelerations["organ"])   # an alias
     np.testing.assert_array_equal(df["C6.force"], m.values["C6.force"])
     assert df.attrs["units"] == {
         "theta": "rad", "time": "s", "speed": "rad/s", "acceleration": "rad/s²",
         "motor_torque": "N·m", "load_torque": "N·m",
-        **{f"{b}.acceleration": "rad/s²" for b in bodies},
+        **{f"{b}.acceleration": "rad/s²" for b in bodies}, "eps_organ": "rad/s²",
         "C1.force": "N·m", "C1.deformation": "rad", "C6.force": "N·m", "C6.deformation": "rad"}
 
 

@@ -331,7 +331,7 @@ def _print_motion(args, scene, result) -> None:
           f"{result.wall_time * 1e3:.1f} ms")
     print(f"error estimate {est}, periodicity {per} (relative change of the extrema at twice "
           f"the step / from the previous revolution)")
-    _print_extrema(scene, result.extrema)
+    _print_extrema(result.extrema, result.units)
     print_written(notes=result.notes, indent="")
 
 
@@ -347,32 +347,11 @@ def _with_overrides(args, scene):
     return apply_overrides(scene, over) if over else scene
 
 
-def _quantity_unit(scene, key: str, keys) -> str:
-    """The unit of a scene output ``key`` (``BODY.acceleration``, ``ELEMENT.force``, an alias,
-    a shaft curve); ``keys`` are all the outputs (a point has ``_x``/``_y`` components)."""
-    aliases = dict(scene.simulate.aliases) if scene.simulate is not None else {}
-    name, _, what = aliases.get(key, key).rpartition(".")
-    torsion = name in {t.name for t in scene.torsions}
-    if what in ("acceleration_x", "acceleration_y") or (what == "acceleration" and (
-            f"{name}.acceleration_x" in keys or name.endswith(".travel"))):
-        return "m/s²"                               # a point's or a block's travel
-    if what in ("acceleration", "rigid_acceleration") or key == "acceleration":
-        return "rad/s²"
-    if what == "force":
-        return "N·m" if torsion else "N"
-    if what == "deformation":
-        return "rad" if torsion else "m"
-    if what == "moment" and name == "drive":        # the generalised force of the drive
-        return "N·m" if scene.drive.link is not None else "N"
-    return {"moment": "N·m", "speed": "rad/s", "motor_torque": "N·m",
-            "load_torque": "N·m"}.get(what or key, "")
-
-
-def _print_extrema(scene, extrema: dict) -> None:
+def _print_extrema(extrema: dict, units: dict) -> None:
     """The table of each output's least and largest value over the cycle, with its unit."""
     print(f"{'quantity':<28} {'min':>14} {'max':>14}  unit")
     for k, (lo, hi) in extrema.items():
-        print(f"{k:<28} {lo:>14.6g} {hi:>14.6g}  {_quantity_unit(scene, k, extrema)}")
+        print(f"{k:<28} {lo:>14.6g} {hi:>14.6g}  {units[k]}")
 
 
 def _shaft(args, scene) -> int:
@@ -390,14 +369,7 @@ def _shaft(args, scene) -> int:
                            rigid=args.rigid, method=args.method,
                            steps_per_period=args.steps_per_period,
                            **({} if args.rtol is None else {"rtol": args.rtol}))
-    aliases = {a: t.rsplit(".", 1)[0] for a, t in (scene.simulate.aliases.items()
-               if scene.simulate is not None else ())
-               if t.endswith("acceleration") and t.rsplit(".", 1)[0] in r.body_accelerations
-               and (not r.values or not t.endswith(".rigid_acceleration"))}   # elastic: not rigid
-    curves = {"speed": r.speed, "acceleration": r.acceleration, "motor_torque": r.motor_torque,
-              "load_torque": r.load_torque,
-              **{f"{b}.acceleration": v for b, v in r.body_accelerations.items()},
-              **{a: r.body_accelerations[b] for a, b in aliases.items()}, **r.values}
+    curves = r.curves()
     write_outputs(args, [("theta_deg", np.degrees(r.theta)), ("time", r.time), *curves.items()],
                   comment=f"# {scene.name} ({args.scene}); steady cycle of the dynamic main "
                           f"shaft, flywheel {r.flywheel!r} kg·m²")
@@ -419,7 +391,7 @@ def _shaft(args, scene) -> int:
     if r.startup_time is not None:
         print(f"start-up from rest: within 1 % of ω_mean of the steady band after "
               f"{r.startup_time:.4g} s")
-    _print_extrema(scene, {k: (float(v.min()), float(v.max())) for k, v in curves.items()})
+    _print_extrema({k: (float(v.min()), float(v.max())) for k, v in curves.items()}, r.units)
     print_written(notes=r.notes, indent="")
     return 0
 

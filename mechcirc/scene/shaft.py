@@ -103,8 +103,11 @@ class ShaftMotion:
         and ``MOMENT.moment`` [N·m] over the cycle (empty when rigid).
     states : ndarray
         Elastic scenes: the free parts' [q, q̇] at each θ (rows); shape (points, 0) rigid.
+    aliases : dict[str, str]
+        The scene's ``[simulate.aliases]`` of a body's acceleration: alias → body (an
+        elastic scene's not of its ``rigid_acceleration``).
     units : dict[str, str]
-        The unit of each column of :meth:`to_dataframe` past the shaft's own.
+        The unit of each of :meth:`curves`.
     """
 
     __repr__ = summary_repr
@@ -130,21 +133,25 @@ class ShaftMotion:
     notes: tuple = ()
     values: dict = field(default_factory=dict)
     states: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
+    aliases: dict = field(default_factory=dict)
     units: dict = field(default_factory=dict)
 
+    def curves(self) -> dict:
+        """Every curve over the cycle by name: ``speed`` [rad/s], ``acceleration``
+        [rad/s²], ``motor_torque`` and ``load_torque`` [N·m], each body's
+        ``BODY.acceleration``, each alias of one, and each of ``values`` (their units
+        in :attr:`units`)."""
+        bodies = self.body_accelerations
+        return {"speed": self.speed, "acceleration": self.acceleration,
+                "motor_torque": self.motor_torque, "load_torque": self.load_torque,
+                **{f"{b}.acceleration": a for b, a in bodies.items()},
+                **{a: bodies[b] for a, b in self.aliases.items()}, **self.values}
+
     def to_dataframe(self):
-        """One row per θ of the steady cycle: ``theta`` [rad], ``time`` [s], ``speed``
-        [rad/s], ``acceleration`` [rad/s²], ``motor_torque`` and ``load_torque`` [N·m], each
-        body's ``BODY.acceleration`` and each of ``values``; ``attrs["units"]`` the unit of
-        each column (:func:`~mechcirc.scene.simulation.output_units`)."""
-        cols = {"theta": self.theta, "time": self.time, "speed": self.speed,
-                "acceleration": self.acceleration, "motor_torque": self.motor_torque,
-                "load_torque": self.load_torque,
-                **{f"{b}.acceleration": a for b, a in self.body_accelerations.items()},
-                **self.values}
-        units = {"theta": "rad", "time": "s", "speed": "rad/s", "acceleration": "rad/s²",
-                 "motor_torque": "N·m", "load_torque": "N·m", **self.units}
-        return data_frame(cols, {c: units.get(c, "") for c in cols})
+        """One row per θ of the steady cycle: ``theta`` [rad], ``time`` [s] and each of
+        :meth:`curves`; ``attrs["units"]`` the unit of each column."""
+        cols = {"theta": self.theta, "time": self.time, **self.curves()}
+        return data_frame(cols, {"theta": "rad", "time": "s", **self.units})
 
     def summary(self) -> dict:
         """The scalar results and extremes, JSON-ready."""
@@ -758,12 +765,18 @@ def _tabulate(scene, eq, sol, th0, cyc, points):
     bodies, values = eq.samples(th, w, z, acc, out)
     wmin, wmax = refined_extremes(lambda x: sol.sol(x)[0], th, w)
     mean = cyc / period
+    aliases = {a: t.rsplit(".", 1)[0] for a, t in (scene.simulate.aliases.items()
+               if scene.simulate is not None else ())
+               if t.endswith("acceleration") and t.rsplit(".", 1)[0] in bodies
+               and (not values or not t.endswith(".rigid_acceleration"))}   # elastic: not rigid
     return dict(name=scene.name, source=scene.source, flywheel=eq.Jf, theta=th - th0, time=tt,
                 speed=w, acceleration=acc, motor_torque=out[:, -4].copy(),
                 load_torque=-eq.c * out[:, -1], body_accelerations=bodies, omega_min=wmin, omega_max=wmax,
                 omega_mean=mean, delta=(wmax - wmin) / mean, period=period, values=values,
-                states=np.ascontiguousarray(z),
-                units=output_units(scene, [f"{b}.acceleration" for b in bodies] + list(values)))
+                states=np.ascontiguousarray(z), aliases=aliases,
+                units={"speed": "rad/s", "acceleration": "rad/s²", "motor_torque": "N·m",
+                       "load_torque": "N·m", **output_units(
+                           scene, [f"{b}.acceleration" for b in bodies] + [*aliases, *values])})
 
 
 def _startup(scene, eq, shaft, th0, cyc, w0, motion, rtol, scale, peak):
