@@ -87,7 +87,7 @@ def old_solve(lk, thetas, max_step_deg=2.0, use_fsolve=False):
     """The pre-issue-14 continuation, verbatim in its numerics; returns q per position."""
     from scipy.optimize import fsolve
 
-    local, idx, rows = lk.local_offsets(), lk._index(), lk.constraint_rows()
+    local, idx, rows = lk.local_offsets(), lk.link_index(), lk.constraint_rows()
     n = 3 * len(lk.links)
     nc = len(lk.cranks)
     w1 = lk.cranks[0].omega

@@ -65,7 +65,7 @@ def main() -> None:
     s, s1, s2 = cycloidal(th, h, *ang)
     f = mo.point_names.index("F")
     psi, psid = lever(s, s1 * w, P["O"], P["F"], oa, fa)
-    j = lk._index()["lever"]
+    j = lk.link_index()["lever"]
     print(f"follower lifted {h * 1e3:g} mm (cycloidal 120/60/120/60°), lever OA = {oa * 1e3:g} "
           f"mm, push rod {fa * 1e3:g} mm, Ω = {w:g} rad/s")
     print("1. against the closed form over 721 cam angles (max |difference|)")

@@ -3,7 +3,7 @@ written out from the equations (absolute coordinates q = [x, y, φ] per link), i
 the package's solvers: a reference for the tests (fsolve on Φ) and the benchmarks' baseline
 (the first release's Newton on them).
 
-``local``, ``idx`` and ``rows`` are ``lk.local_offsets()``, ``lk._index()`` and
+``local``, ``idx`` and ``rows`` are ``lk.local_offsets()``, ``lk.link_index()`` and
 ``lk.constraint_rows()``."""
 
 import math

@@ -285,7 +285,8 @@ class Linkage(Memos):
             remaining = [l for l in remaining if l not in combo]
         return tuple(groups)
 
-    def _index(self):
+    def link_index(self) -> dict[str, int]:
+        """link → its index i in the coordinates q (its x, y, φ are q[3i:3i + 3])."""
         return {n: i for i, n in enumerate(self.link_names)}
 
     def local_offsets(self) -> dict[str, dict[str, NDArray[np.float64]]]:

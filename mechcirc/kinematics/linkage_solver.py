@@ -300,7 +300,7 @@ def plan(lk) -> _Plan:
     _Plan
         Dyads, or Newton's method when the structure has no dyad order.
     """
-    idx = lk._index()
+    idx = lk.link_index()
     nb = len(idx)
     local = lk.local_offsets()
     points = tuple(lk.pose)

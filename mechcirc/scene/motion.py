@@ -406,7 +406,7 @@ def _linkage_part(scene, B, h, i, part, tables, tlink):
                   tuple(p for p in lk.ground if p in ppts), plinks,
                   (Crank(cb, piv, 1.0),), scene.source,
                   sliders=tuple(x for x in lk.sliders if x.link in plinks))
-    sidx = sub._index()
+    sidx = sub.link_index()
     for _ in range(6):
         grid = np.linspace(lo - margin, hi + margin, B.n + 1)
         try:
@@ -534,7 +534,7 @@ def rigid_tables(scene: Scene, N: int):
             raise GeometryError(f"{scene.source}: the rigid mechanism cannot turn a full "
                                 f"revolution, so the scene cannot be simulated over the cycle "
                                 f"({exc})") from None
-        idx = lk._index()
+        idx = lk.link_index()
         ang = {l: np.unwrap([s.q[3 * i + 2] for s in states]) for l, i in idx.items()}
         ang1 = {l: np.array([s.qdot[3 * i + 2] for s in states]) / w1 for l, i in idx.items()}
         ang2 = {l: np.array([s.qddot[3 * i + 2] for s in states]) / w1 ** 2

@@ -98,7 +98,7 @@ def test_six_bar_against_fsolve_and_finite_differences(backend):
     assert lk.solver == "newton"
     th = np.radians(np.arange(0.0, 360.0, 0.25))
     m = lk.motion(th)
-    local, idx, rows = lk.local_offsets(), lk._index(), lk.constraint_rows()
+    local, idx, rows = lk.local_offsets(), lk.link_index(), lk.constraint_rows()
     for k in (0, 97, 400, 1000, 1439):
         angles = [c.omega * m.t[k] for c in lk.cranks]
         guess = m.q[k] + 1e-3                   # fsolve from a perturbed start

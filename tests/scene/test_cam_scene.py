@@ -65,7 +65,7 @@ def test_the_lever_and_its_end_follow_the_law_exactly():
     lk = scene.linkage
     theta = np.linspace(0.0, 2 * math.pi, 721)
     m = lk.motion(theta)
-    j = lk._index()["lever"]
+    j = lk.link_index()["lever"]
     x, x1, x2 = cycloidal(theta)
     assert np.max(np.abs(np.unwrap(m.q[:, 3 * j + 2]) - x)) <= 1e-12 * H
     assert np.max(np.abs(m.qdot[:, 3 * j + 2] - x1 * W)) <= 1e-12 * H * W
@@ -241,7 +241,7 @@ def test_a_lift_table_drives_the_lever_through_its_rows(tmp_path):
     (tmp_path / "s.toml").write_text(text)
     lk = load_scene(tmp_path / "s.toml").linkage
     m = lk.motion(np.radians(deg))
-    j = lk._index()["lever"]
+    j = lk.link_index()["lever"]
     assert np.max(np.abs(np.unwrap(m.q[:, 3 * j + 2]) - np.radians(lift))) <= 1e-13
 
 

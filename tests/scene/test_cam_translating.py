@@ -88,7 +88,7 @@ def test_follower_lever_and_points_follow_the_law_exactly():
     assert np.max(np.abs(m.velocities[:, f, 1] - mm * sd)) <= 1e-12 * mm * H * W
     assert np.max(np.abs(m.accelerations[:, f, 1] - mm * sdd)) <= 1e-12 * mm * H * W * W
     psi, psid, psidd = lever(s, sd, sdd)
-    j = lk._index()["lever"]
+    j = lk.link_index()["lever"]
     assert np.max(np.abs(m.q[:, 3 * j + 2] - psi)) <= 1e-12
     assert np.max(np.abs(m.qdot[:, 3 * j + 2] - psid)) <= 1e-12 * W
     assert np.max(np.abs(m.qddot[:, 3 * j + 2] - psidd)) <= 1e-12 * W * W
@@ -285,7 +285,7 @@ def test_a_long_lift_is_reached_by_damped_newton_and_a_lift_out_of_reach_is_refu
     m = lk.motion(th)
     s = 15.0 * cycloidal(th)[0]                      # the law of h = 20 mm, scaled to 300 mm
     psi = lever(s, 0 * s, 0 * s)[0]
-    assert np.max(np.abs(m.q[:, 3 * lk._index()["lever"] + 2] - psi)) <= 1e-12
+    assert np.max(np.abs(m.q[:, 3 * lk.link_index()["lever"] + 2] - psi)) <= 1e-12
     assert math.degrees(psi[1]) > 65.0
     lk = parse_scene(text.replace("stroke = 300.0", "stroke = 400.0"), "far.toml").linkage
     # the search's trials past the lock give NaN rates, rejected in silence (numpy's

@@ -69,7 +69,7 @@ def test_the_arm_touches_the_cam_it_rides_on():
     lk = scene.linkage
     theta = np.radians(np.arange(0.0, 360.0, 7.5))
     m = lk.motion(theta)
-    j = lk._index()["lever"]
+    j = lk.link_index()["lever"]
     turn = np.unwrap(m.q[:, 3 * j + 2])
     turn = turn - turn[0]
     assert np.max(np.abs(turn - cycloidal_angle(theta))) <= 1e-12 * H
