@@ -654,8 +654,8 @@ def _polish_nodal(stacks: list, design: NDArray, s0: NDArray, pole: NDArray, e0:
         with np.errstate(all="ignore"):
             return K, total_error(sens_data, est + rounding) * np.abs(K)
 
-    return secant_polish(lambda x: g_and_bound(pole, lambda i, want: evaluate(x, i, want)),
-                         s0, e0, damped)
+    return secant_polish(lambda x: g_and_bound(pole, lambda i, want: evaluate(x, i, want),
+                                               np.isfinite(x)), s0, e0, damped)
 
 
 def _stacked_matrices(ds: Designs, system, which: NDArray):

@@ -866,17 +866,19 @@ def _g_and_delta(system, s: np.ndarray, pole: np.ndarray):
     # Anti-resonances on the held system (built once per system): 1/K = −q there, and A
     # is singular at the root while the held matrix is not.
     systems = (system, system.memo("_held", lambda: nodal.held(system)))
-    return g_and_bound(pole, lambda i, want: nodal.evaluate_complex(systems[i], s[want]))
+    return g_and_bound(pole, lambda i, want: nodal.evaluate_complex(systems[i], s[want]),
+                       np.isfinite(s))
 
 
-def g_and_bound(pole: np.ndarray, evaluate):
+def g_and_bound(pole: np.ndarray, evaluate, live: np.ndarray):
     """g (K; −K of the drive-held system at anti-resonances ``pole``) and its bound, from
     ``evaluate(i, want) -> (K, bound of K)`` at the points ``want`` of system ``i`` (0:
-    the network, 1: held).  The refined value is good to about eps relative at best (its
-    rounding to float64), whatever the estimate of the solve says."""
+    the network, 1: held) among the ``live`` ones (the others NaN, not evaluated: a
+    secant step leaves its converged roots out).  The refined value is good to about eps
+    relative at best (its rounding to float64), whatever the estimate of the solve says."""
     eps = np.finfo(float).eps
     g, dg = np.full(pole.shape, np.nan, dtype=complex), np.full(pole.shape, np.inf)
-    for i, want in enumerate((~pole, pole)):
+    for i, want in enumerate((~pole & live, pole & live)):
         if want.any():
             K, dK = evaluate(i, want)
             g[want] = -K if i else K
@@ -915,7 +917,7 @@ def secant_steps(g_and_delta, admissible, s0, e0, offset, active=True, iteration
             c = np.where(active, b - gb / sl, b)
         c, ok = admissible(c)
         ok &= active
-        gc, dc = g_and_delta(np.where(ok, c, b))
+        gc, dc = g_and_delta(np.where(ok, c, np.nan))     # (NaN: not evaluated, not used)
         ok &= np.isfinite(gc)
         # On an exact zero of g its relative estimate says nothing (0·inf):
         # the uncertainty at the previous iterate, a step away, stands.
