@@ -502,10 +502,12 @@ def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
         active = active[est[active] > 16 * eps]
         bound = getattr(solve_fn, "bound", None)
         if step == 0 and bound is not None and active.size:
-            # Or once the error after it is bounded by 16 eps (first_step_bound).
-            x1 = xh[active]
-            d1 = d[active]
-            first = first_step_bound(system, omega[active], x1, xl[active], d1, r[active],
+            # Or once the error after it is bounded by 16 eps (first_step_bound); every
+            # point still active (as usual): the arrays themselves, not copies.
+            rows: Any = slice(None) if active.size == omega.size else active
+            x1 = xh[rows]
+            d1 = d[rows]
+            first = first_step_bound(system, omega[rows], x1, xl[rows], d1, r[rows],
                                      bound(x1, d1, active), kern)
             proven = first <= 16 * eps
             est[active[proven]] = first[proven]

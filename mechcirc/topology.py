@@ -112,21 +112,28 @@ def loaded_groups(groups: Sequence[Sequence[tuple[str, str]]], a: str, b: str,
     # (≈ 0.1–0.15 s of start-up); tests/test_ux_notebooks.py checks the block
     # against networkx.biconnected_component_edges on random graphs.
     adj = adjacency(p for pairs in groups for p in pairs)  # (a self-loop: skipped by _block_with)
-    if a not in adj or b not in adj or b not in reachable(adj, a):
+    # Joined by a path of elements: a, b neighbours (or one node), or else the block of
+    # the drive's edge a–b (added below) holds a third node, a cycle through that edge
+    # (the edge alone, a bridge, has no other path): no search of its own for the path.
+    joined = a in adj and b in adj and (a == b or b in adj[a])
+    if a in adj and b in adj:
+        adj[a].add(b)
+        adj[b].add(a)
+        block = _block_with(adj, a, b)
+        joined = joined or len(block) > 2
+    if not joined:
         where = f" (line {drive_line})" if drive_line else ""
         raise TopologyError(
             f"the drive's nodes {a!r} and {b!r}{where} are not connected by any path "
             "of elements", nodes=(a, b),
             location=f"{source}:{drive_line}:1" if source and drive_line else None)
-    adj[a].add(b)
-    adj[b].add(a)
-    block = _block_with(adj, a, b)
     # A lever whose sides share a node (p2 = s2 = '0') has a pair (u, u) in its
     # clique: it couples nothing and belongs to no block, so it is not asked for.
     # A pair (an edge) lies in the block when both its nodes do: two blocks share
     # at most one node, so an edge between two of a block's nodes is the block's.
+    inside = block.__contains__
     return [i for i, pairs in enumerate(groups)
-            if all(u in block and w in block for u, w in pairs if u != w)]
+            if all(u == w or (inside(u) and inside(w)) for u, w in pairs)]
 
 
 def _block_with(adj: dict[str, set[str]], a: str, b: str) -> set[str]:
