@@ -131,9 +131,8 @@ def loaded_groups(groups: Sequence[Sequence[tuple[str, str]]], a: str, b: str,
     # clique: it couples nothing and belongs to no block, so it is not asked for.
     # A pair (an edge) lies in the block when both its nodes do: two blocks share
     # at most one node, so an edge between two of a block's nodes is the block's.
-    inside = block.__contains__
     return [i for i, pairs in enumerate(groups)
-            if all(u == w or (inside(u) and inside(w)) for u, w in pairs)]
+            if all(u in block and w in block for u, w in pairs if u != w)]
 
 
 def _block_with(adj: dict[str, set[str]], a: str, b: str) -> set[str]:
@@ -143,25 +142,30 @@ def _block_with(adj: dict[str, set[str]], a: str, b: str) -> set[str]:
     low = {a: 0}
     edges: list[tuple[str, str]] = []
     stack: list[tuple[str, str | None, Iterator[str]]] = [(a, None, iter(adj[a]))]
+    seen, push = disc.get, edges.append
     while stack:
         u, parent, it = stack[-1]
+        du = disc[u]
         for w in it:
             if w == parent or w == u:
                 continue
-            if w not in disc:
+            dw = seen(w)
+            if dw is None:
                 disc[w] = low[w] = len(disc)
-                edges.append((u, w))
+                push((u, w))
                 stack.append((w, u, iter(adj[w])))
                 break
-            if disc[w] < disc[u]:           # a back edge to an ancestor
-                low[u] = min(low[u], disc[w])
-                edges.append((u, w))
+            if dw < du:                     # a back edge to an ancestor
+                if dw < low[u]:
+                    low[u] = dw
+                push((u, w))
         else:
             stack.pop()
             if not stack:
                 break
             p = stack[-1][0]
-            low[p] = min(low[p], low[u])
+            if low[u] < low[p]:
+                low[p] = low[u]
             if low[u] >= disc[p]:           # p separates u's subtree: a block ends
                 block: set[str] = set()
                 while True:
