@@ -109,6 +109,29 @@ def _block_in(omega, xr, xi, xlr, xli, k0, m, W, X):
 
 
 @_jit
+def _bucket_plan(b_i, b_j, b_s, n_buckets):
+    """(start, code): the terms of bucket k at ``code[start[k]:start[k + 1]]`` in the order
+    they are added — the + terms by element (code e), then the − terms (n_e + e), then
+    the lever stamps (2·n_e + s) — by a stable counting sort (bucket n_buckets, the
+    reference's row, dropped)."""
+    n_e = b_i.size
+    start = np.zeros(n_buckets + 2, dtype=np.int64)
+    for src in (b_i, b_j, b_s):
+        for t in range(src.size):
+            start[src[t] + 2] += 1
+    for k in range(2, n_buckets + 2):
+        start[k] += start[k - 1]
+    code = np.empty(start[n_buckets + 1], dtype=np.int64)
+    for base, src in ((0, b_i), (n_e, b_j), (2 * n_e, b_s)):
+        for t in range(src.size):
+            bk = src[t]
+            if bk < n_buckets:
+                code[start[bk + 1]] = base + t
+                start[bk + 1] += 1
+    return start, code
+
+
+@_jit
 def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
              e_i, e_j, e_val, e_vh, e_vl, s_col, s_val, s_vh, s_vl, out):
     """b − A(ω) x into ``out`` (complex, shape (n_ω, n)); x = (xr + j xi) + (xlr + j xli).
@@ -120,51 +143,56 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
     the buckets 4·row + kind (kind: mass, spring, damper, lever) of +element e,
     −element e and lever stamp s (4·n: the reference's row, dropped).  Each
     bucket receives its terms in the numpy code's order — the + terms by
-    element, then the − terms, then the lever stamps — and adds them by TwoSum
-    into ``acc`` (re_hi, re_lo, im_hi, im_lo by bucket).  Each residual,
-    rounded to its real parts re and im, is stored as numpy forms
-    ``re + 1j * im``, so a signed zero or a NaN comes out as the numpy code's.
+    element, then the − terms, then the lever stamps (:func:`_bucket_plan`) — and
+    adds them by TwoSum into ``acc`` (re_hi, re_lo, im_hi, im_lo by kind), one row
+    at a time: the terms y·(x_i − x_j) formed once for the block (``T``), each row's
+    four sums then its residual formed from them.  Each residual, rounded to its real
+    parts re and im, is stored as numpy forms ``re + 1j * im``, so a signed zero or a
+    NaN comes out as the numpy code's.
     """
     n_w, n = out.shape
-    nb, drop = SOLVE_BLOCK, 4 * n
+    n_e, nb = e_i.size, SOLVE_BLOCK
+    start, code = _bucket_plan(b_i, b_j, b_s, 4 * n)
     X = np.zeros((4, n + 1, nb))
-    T = np.empty((e_i.size, 4, nb))             # +y·(x_i − x_j), formed once
-    acc = np.empty((4 * n + 4, 4, nb))
+    T = np.empty((n_e, 4, nb))                  # +y·(x_i − x_j), formed once
+    acc = np.empty((4, 4, nb))                  # one row's sums by kind
     W = np.ones((3, nb))                        # ω, split
     R = np.empty((2, n, nb))
     for k0 in range(0, n_w, nb):
         m = min(nb, n_w - k0)                   # (past m, the last block's stale ω: unused)
         _block_in(omega, xr, xi, xlr, xli, k0, m, W, X)
-        acc[:] = 0.0
-        for e in range(e_i.size):
-            i, j, bk = e_i[e], e_j[e], b_i[e]
+        for e in range(n_e):
+            i, j = e_i[e], e_j[e]
             v, vh, vl = e_val[e], e_vh[e], e_vl[e]
             for b in range(nb):
                 T[e, 0, b], T[e, 1, b], T[e, 2, b], T[e, 3, b] = _element_term(
                     v, vh, vl, X[0, i, b], X[1, i, b], X[0, j, b], X[1, j, b], X[2, i, b],
                     X[3, i, b], X[2, j, b], X[3, j, b], has_lo)
-            if bk != drop:
-                for b in range(nb):
-                    _add(acc, bk, b, T[e, 0, b], T[e, 1, b], T[e, 2, b], T[e, 3, b])
-        for e in range(e_i.size):               # −y·(x_i − x_j) into the second row
-            bk = b_j[e]
-            if bk != drop:
-                for b in range(nb):
-                    _add(acc, bk, b, -T[e, 0, b], -T[e, 1, b], -T[e, 2, b], -T[e, 3, b])
-        for s in range(s_col.size):
-            c, bk = s_col[s], b_s[s]
-            v, vh, vl = s_val[s], s_vh[s], s_vl[s]
-            if bk != drop:
-                for b in range(nb):
-                    th_r, tl_r = _two_prod(v, vh, vl, X[0, c, b])
-                    th_i, tl_i = _two_prod(v, vh, vl, X[1, c, b])
-                    if has_lo:
-                        tl_r = tl_r + v * X[2, c, b]
-                        tl_i = tl_i + v * X[3, c, b]
-                    _add(acc, bk, b, th_r, tl_r, th_i, tl_i)
         for r in range(n):
+            acc[:] = 0.0
+            for kind in range(4):
+                for t in range(start[4 * r + kind], start[4 * r + kind + 1]):
+                    e = code[t]
+                    if e < n_e:
+                        for b in range(nb):
+                            _add(acc, kind, b, T[e, 0, b], T[e, 1, b], T[e, 2, b], T[e, 3, b])
+                    elif e < 2 * n_e:           # −y·(x_i − x_j) into the second row
+                        e -= n_e
+                        for b in range(nb):
+                            _add(acc, kind, b, -T[e, 0, b], -T[e, 1, b], -T[e, 2, b],
+                                 -T[e, 3, b])
+                    else:
+                        s = e - 2 * n_e
+                        c, v, vh, vl = s_col[s], s_val[s], s_vh[s], s_vl[s]
+                        for b in range(nb):
+                            th_r, tl_r = _two_prod(v, vh, vl, X[0, c, b])
+                            th_i, tl_i = _two_prod(v, vh, vl, X[1, c, b])
+                            if has_lo:
+                                tl_r = tl_r + v * X[2, c, b]
+                                tl_i = tl_i + v * X[3, c, b]
+                            _add(acc, kind, b, th_r, tl_r, th_i, tl_i)
             for b in range(nb):
-                R[0, r, b], R[1, r, b] = _row_residual(acc, r, b, W[0, b], W[1, b], W[2, b],
+                R[0, r, b], R[1, r, b] = _row_residual(acc, 0, b, W[0, b], W[1, b], W[2, b],
                                                        rhs[r])
         for b in range(m):
             for r in range(n):
@@ -334,6 +362,26 @@ def band_assemble_factor(dc, m, kk, omega, dest_c, dest_r, kl, F, ipiv, ok):
              np.empty(nw))
 
 
+@_jit_inline
+def _block_factors(fr, fi, ipiv, w, G, P):
+    """The factors of the ω ``w`` (one block): (real parts, imaginary parts, pivots, the
+    first ω's place) read in place when the ω are consecutive (the usual case), else
+    copied into the scratch ``G``, ``P`` (gathered once, not at every use)."""
+    nb = w.size
+    step = 1
+    for b in range(1, nb):
+        step = step if w[b] - w[b - 1] == 1 else 0
+    if step:
+        return fr, fi, ipiv, w[0]
+    for j in range(fr.shape[0]):
+        for b in range(nb):
+            P[j, b] = ipiv[j, w[b]]
+        for d in range(fr.shape[1]):
+            for b in range(nb):
+                G[0, j, d, b], G[1, j, d, b] = fr[j, d, w[b]], fi[j, d, w[b]]
+    return G[0], G[1], P, 0
+
+
 @_jit
 def band_solve_perm(F, kl, ipiv, rows, p, r, out):
     """out[k, p] = A_p⁻¹ r[k, p] with the factors ``F[..., rows[k]]`` of :func:`_band_lu` (A's
@@ -341,12 +389,21 @@ def band_solve_perm(F, kl, ipiv, rows, p, r, out):
     (complex products and quotients as numba forms them), for :data:`SOLVE_BLOCK` ω at a
     time, ω innermost and the row swaps by selects (as :func:`_band_lu`)."""
     n = F.shape[1]
+    _solve_blocks(F, kl, ipiv, rows, p, r, out, np.empty((2, n, SOLVE_BLOCK)),
+                  np.empty((2, n, F.shape[2], SOLVE_BLOCK)), np.empty((n, SOLVE_BLOCK), np.int64))
+
+
+@_jit
+def _solve_blocks(F, kl, ipiv, rows, p, r, out, x, G, P):
+    """:func:`band_solve_perm` with its scratch ``x``, ``G``, ``P`` given: arrays allocated in
+    the kernel itself keep LLVM from vectorising its loops over ω (seen in the assembly)."""
+    n = F.shape[1]
     kv = 2 * kl
-    fr, fi = F[0], F[1]
-    xr, xi = np.empty((n, SOLVE_BLOCK)), np.empty((n, SOLVE_BLOCK))
+    xr, xi = x[0], x[1]
     for k0 in range(0, rows.size, SOLVE_BLOCK):
         nb = min(SOLVE_BLOCK, rows.size - k0)
-        w = rows[k0:k0 + nb]
+        fr, fi, piv, q0 = _block_factors(F[0], F[1], ipiv, rows[k0:k0 + nb], G, P)
+        q = np.uint64(q0)                   # (unsigned: q + np.uint64(b) needs no wraparound)
         for i in range(n):
             for b in range(nb):
                 xr[i, b], xi[i, b] = r[k0 + b, p[i]].real, r[k0 + b, p[i]].imag
@@ -354,25 +411,25 @@ def band_solve_perm(F, kl, ipiv, rows, p, r, out):
             km = min(kl, n - 1 - j)
             for t in range(1, km + 1):
                 for b in range(nb):
-                    sw = ipiv[j, w[b]] - j == t
+                    sw = piv[j, q + np.uint64(b)] - j == t
                     xr[j, b], xr[j + t, b] = (xr[j + t, b], xr[j, b]) if sw else (xr[j, b], xr[j + t, b])
                     xi[j, b], xi[j + t, b] = (xi[j + t, b], xi[j, b]) if sw else (xi[j, b], xi[j + t, b])
             for t in range(1, km + 1):
                 for b in range(nb):
-                    lr, li, ar, ai = fr[j, kv + t, w[b]], fi[j, kv + t, w[b]], xr[j, b], xi[j, b]
+                    lr, li, ar, ai = fr[j, kv + t, q + np.uint64(b)], fi[j, kv + t, q + np.uint64(b)], xr[j, b], xi[j, b]
                     xr[j + t, b] -= lr * ar - li * ai
                     xi[j + t, b] -= lr * ai + li * ar
         for j in range(n - 1, -1, -1):         # U, by columns
             for b in range(nb):
-                xr[j, b], xi[j, b] = _cdiv(xr[j, b], xi[j, b], fr[j, kv, w[b]], fi[j, kv, w[b]],
+                xr[j, b], xi[j, b] = _cdiv(xr[j, b], xi[j, b], fr[j, kv, q + np.uint64(b)], fi[j, kv, q + np.uint64(b)],
                                            True)
             for i in range(max(0, j - kv), j):
                 for b in range(nb):
-                    ur, ui = fr[j, kv + i - j, w[b]], fi[j, kv + i - j, w[b]]
+                    ur, ui = fr[j, kv + i - j, q + np.uint64(b)], fi[j, kv + i - j, q + np.uint64(b)]
                     xr[i, b] -= ur * xr[j, b] - ui * xi[j, b]
                     xi[i, b] -= ur * xi[j, b] + ui * xr[j, b]
-        for b in range(nb):
-            for i in range(n):
+        for i in range(n):
+            for b in range(nb):
                 out[k0 + b, p[i]] = complex(xr[i, b], xi[i, b])
 
 
