@@ -289,15 +289,14 @@ def _band_lu(re, im, kl, ipiv, ok, best, jp, rr, ri):
     """
     n, _, nw = re.shape
     kv = 2 * kl
-    for j in range(n):
+    for j in range(n):                  # (indexed in place: a view costs a reference count)
         km = min(kl, n - 1 - j)
         ju = min(j + kv, n - 1)
         best[:] = -1.0
         jp[:] = 0
         for t in range(km + 1):
-            pr, pi = re[j, kv + t], im[j, kv + t]
             for k in range(nw):
-                m = abs(pr[k]) + abs(pi[k])
+                m = abs(re[j, kv + t, k]) + abs(im[j, kv + t, k])
                 g = m > best[k]
                 best[k] = m if g else best[k]
                 jp[k] = t if g else jp[k]
@@ -306,34 +305,31 @@ def _band_lu(re, im, kl, ipiv, ok, best, jp, rr, ri):
             ok[k] = ok[k] and best[k] != 0.0 and np.isfinite(best[k])
         for c in range(j, ju + 1):
             d = kv + j - c
-            xr, xi = re[c, d], im[c, d]
             for t in range(1, km + 1):
-                yr, yi = re[c, d + t], im[c, d + t]
                 for k in range(nw):
                     sw = jp[k] == t
-                    xr[k], yr[k] = (yr[k], xr[k]) if sw else (xr[k], yr[k])
-                    xi[k], yi[k] = (yi[k], xi[k]) if sw else (xi[k], yi[k])
+                    xr, yr, xi, yi = re[c, d, k], re[c, d + t, k], im[c, d, k], im[c, d + t, k]
+                    re[c, d, k], re[c, d + t, k] = (yr, xr) if sw else (xr, yr)
+                    im[c, d, k], im[c, d + t, k] = (yi, xi) if sw else (xi, yi)
         if km > 0:
             for k in range(nw):
                 rr[k], ri[k] = _cdiv(1.0, 0.0, re[j, kv, k], im[j, kv, k], ok[k])
             for t in range(1, km + 1):
-                lr, li = re[j, kv + t], im[j, kv + t]
                 for k in range(nw):
-                    a, b = lr[k], li[k]
-                    lr[k] = a * rr[k] - b * ri[k]
-                    li[k] = a * ri[k] + b * rr[k]
+                    a, b = re[j, kv + t, k], im[j, kv + t, k]
+                    re[j, kv + t, k] = a * rr[k] - b * ri[k]
+                    im[j, kv + t, k] = a * ri[k] + b * rr[k]
             for c in range(j + 1, ju + 1):
                 d = kv + j - c
-                ur, ui = re[c, d], im[c, d]
                 for t in range(1, km + 1):
-                    lr, li = re[j, kv + t], im[j, kv + t]
-                    vr, vi = re[c, d + t], im[c, d + t]
                     for k in range(nw):
-                        nz = ur[k] != 0.0 or ui[k] != 0.0
-                        a = vr[k] - (lr[k] * ur[k] - li[k] * ui[k])
-                        b = vi[k] - (lr[k] * ui[k] + li[k] * ur[k])
-                        vr[k] = a if nz else vr[k]
-                        vi[k] = b if nz else vi[k]
+                        ur, ui = re[c, d, k], im[c, d, k]
+                        lr, li = re[j, kv + t, k], im[j, kv + t, k]
+                        nz = ur != 0.0 or ui != 0.0
+                        a = re[c, d + t, k] - (lr * ur - li * ui)
+                        b = im[c, d + t, k] - (lr * ui + li * ur)
+                        re[c, d + t, k] = a if nz else re[c, d + t, k]
+                        im[c, d + t, k] = b if nz else im[c, d + t, k]
 
 
 @_jit
