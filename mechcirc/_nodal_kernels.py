@@ -157,7 +157,7 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
     T = np.empty((n_e, 4, nb))                  # +y·(x_i − x_j), formed once
     acc = np.empty((4, 4, nb))                  # one row's sums by kind
     W = np.ones((3, nb))                        # ω, split
-    R = np.empty((2, n, nb))
+    R = np.empty((2, nb))                     # one row's residuals
     for k0 in range(0, n_w, nb):
         m = min(nb, n_w - k0)                   # (past m, the last block's stale ω: unused)
         _block_in(omega, xr, xi, xlr, xli, k0, m, W, X)
@@ -192,11 +192,9 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
                                 tl_i = tl_i + v * X[3, c, b]
                             _add(acc, kind, b, th_r, tl_r, th_i, tl_i)
             for b in range(nb):
-                R[0, r, b], R[1, r, b] = _row_residual(acc, 0, b, W[0, b], W[1, b], W[2, b],
-                                                       rhs[r])
-        for b in range(m):
-            for r in range(n):
-                out[k0 + b, r] = complex(R[0, r, b], R[1, r, b])
+                R[0, b], R[1, b] = _row_residual(acc, 0, b, W[0, b], W[1, b], W[2, b], rhs[r])
+            for b in range(m):
+                out[k0 + b, r] = complex(R[0, b], R[1, b])
 
 
 @_jit_inline
@@ -368,14 +366,14 @@ def _block_factors(fr, fi, ipiv, w, G, P):
     for b in range(1, nb):
         step = step if w[b] - w[b - 1] == 1 else 0
     if step:
-        return fr, fi, ipiv, w[0]
+        return fr, fi, ipiv, np.uint64(w[0])
     for j in range(fr.shape[0]):
         for b in range(nb):
             P[j, b] = ipiv[j, w[b]]
         for d in range(fr.shape[1]):
             for b in range(nb):
                 G[0, j, d, b], G[1, j, d, b] = fr[j, d, w[b]], fi[j, d, w[b]]
-    return G[0], G[1], P, 0
+    return G[0], G[1], P, np.uint64(0)
 
 
 @_jit
@@ -398,8 +396,7 @@ def _solve_blocks(F, kl, ipiv, rows, p, r, out, x, G, P):
     xr, xi = x[0], x[1]
     for k0 in range(0, rows.size, SOLVE_BLOCK):
         nb = min(SOLVE_BLOCK, rows.size - k0)
-        fr, fi, piv, q0 = _block_factors(F[0], F[1], ipiv, rows[k0:k0 + nb], G, P)
-        q = np.uint64(q0)                   # (unsigned: q + np.uint64(b) needs no wraparound)
+        fr, fi, piv, q = _block_factors(F[0], F[1], ipiv, rows[k0:k0 + nb], G, P)
         for i in range(n):
             for b in range(nb):
                 xr[i, b], xi[i, b] = r[k0 + b, p[i]].real, r[k0 + b, p[i]].imag
@@ -443,32 +440,36 @@ def band_bound(F, kl, ipiv, rows, p, x, d, out):
     :data:`SOLVE_BLOCK` ω at a time, ω innermost (each ω's sums in the same order)."""
     n = F.shape[1]
     kv = 2 * kl
-    fr, fi = F[0], F[1]
     u = np.empty((n, SOLVE_BLOCK))
     ad = np.empty((n, SOLVE_BLOCK))         # |d| in the order p
     acc = np.empty(SOLVE_BLOCK)
+    G = np.empty((2, n, F.shape[2], SOLVE_BLOCK))
+    P = np.empty((n, SOLVE_BLOCK), dtype=np.int64)
     for k0 in range(0, rows.size, SOLVE_BLOCK):
         nb = min(SOLVE_BLOCK, rows.size - k0)
-        w = rows[k0:k0 + nb]
+        fr, fi, piv, q = _block_factors(F[0], F[1], ipiv, rows[k0:k0 + nb], G, P)
         for j in range(n):
             for b in range(nb):
                 ad[j, b] = _l1(d[k0 + b, p[j]])
         for i in range(n):                  # |U||d|: U[i, j] is F[:, j, kv + i − j]
-            u[i, :nb] = 0.0
+            for b in range(nb):             # (loops, not slices: a view costs a reference count)
+                u[i, b] = 0.0
             for j in range(i, min(n, i + kv + 1)):
                 for b in range(nb):
-                    u[i, b] += (abs(fr[j, kv + i - j, w[b]]) + abs(fi[j, kv + i - j, w[b]])) \
-                        * ad[j, b]
+                    f = q + np.uint64(b)
+                    u[i, b] += (abs(fr[j, kv + i - j, f]) + abs(fi[j, kv + i - j, f])) * ad[j, b]
         for j in range(n - 2, -1, -1):      # then |L_j| and P_j, innermost first
             for t in range(1, min(kl, n - 1 - j) + 1):
                 for b in range(nb):
-                    u[j + t, b] += (abs(fr[j, kv + t, w[b]]) + abs(fi[j, kv + t, w[b]])) * u[j, b]
+                    f = q + np.uint64(b)
+                    u[j + t, b] += (abs(fr[j, kv + t, f]) + abs(fi[j, kv + t, f])) * u[j, b]
             for b in range(nb):
-                q = ipiv[j, w[b]]
+                s = piv[j, q + np.uint64(b)]
                 keep = u[j, b]
-                u[j, b] = u[q, b]
-                u[q, b] = keep
-        acc[:nb] = 0.0
+                u[j, b] = u[s, b]
+                u[s, b] = keep
+        for b in range(nb):
+            acc[b] = 0.0
         for i in range(n):
             for b in range(nb):
                 acc[b] += _l1(x[k0 + b, p[i]]) * u[i, b]
