@@ -108,14 +108,14 @@ def _block_in(omega, xr, xi, xlr, xli, k0, m, W, X):
             X[2, i, b], X[3, i, b] = xlr[k0 + b, i], xli[k0 + b, i]
 
 
-@_jit
+@_jit_inline
 def _bucket_plan(b_i, b_j, b_s, n_buckets):
     """(start, code): the terms of bucket k at ``code[start[k]:start[k + 1]]`` in the order
     they are added — the + terms by element (code e), then the − terms (n_e + e), then
     the lever stamps (2·n_e + s) — by a stable counting sort (bucket n_buckets, the
     reference's row, dropped)."""
     n_e = b_i.size
-    start = np.zeros(n_buckets + 2, dtype=np.int64)
+    start = np.zeros(n_buckets + 3, dtype=np.int64)     # (the last: the dropped, counted)
     for src in (b_i, b_j, b_s):
         for t in range(src.size):
             start[src[t] + 2] += 1
