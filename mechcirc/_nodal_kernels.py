@@ -198,16 +198,14 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
 
 
 @_jit_inline
-def _abs_max(x, k):
-    """max |x[k, i]| over i (≥ 0.0; NaN if one is): numba's |z| (a hypot) only where
-    |re| + |im| is not below the largest so far (|z| ≤ |re| + |im|: elsewhere |z| < m)."""
-    m = 0.0
-    for i in range(x.shape[1]):
-        z = x[k, i]
-        if not (abs(z.real) + abs(z.imag) < m):
-            v = abs(z)
-            if v > m or np.isnan(v):
-                m = v
+def _abs_max(m, z):
+    """max(m, |z|) as a running max |x[k, i]| over i takes it (≥ 0.0; NaN once one is):
+    numba's |z| (a hypot) only where |re| + |im| is not below m (|z| ≤ |re| + |im|:
+    elsewhere |z| < m)."""
+    if not (abs(z.real) + abs(z.imag) < m):
+        v = abs(z)
+        if v > m or np.isnan(v):
+            return v
     return m
 
 
@@ -216,18 +214,23 @@ def estimate(xh, xl, d, prev, r, a, b, lo, first, est, rho):
     """:func:`mechcirc._nodal_steps.estimate_point` at each ω (rows of xh + xl, the
     correction ``d``, the one before it ``prev`` unless ``first``, the residual ``r``; the
     drive's ends ``a``, ``b``, n for the reference) into ``est`` and ``rho``:
-    :func:`mechcirc.nodal._estimate`'s reductions by loops."""
+    :func:`mechcirc.nodal._estimate`'s reductions by loops, the four of a row in one pass
+    (each in its own order; their chains of dependent additions and comparisons overlap)."""
     n = xh.shape[1]
     for k in range(est.size):
         K = abs(_dd_difference(_at(xh, k, a, n), _at(xh, k, b, n), _at(xl, k, a, n),
                                _at(xl, k, b, n), lo))
         da, db = _at(d, k, a, n), _at(d, k, b, n)
         xr = 0j
+        nx = nd = npv = 0.0
         for i in range(n):
             xr += xh[k, i] * r[k, i]
-        nx = _abs_max(xh, k)
-        est[k], rho[k] = _estimate_point(_abs_max(d, k), nx, nx if first else _abs_max(prev, k),
-                                         K, abs(da - db), abs(da), abs(db), abs(xr), first)
+            nx = _abs_max(nx, xh[k, i])
+            nd = _abs_max(nd, d[k, i])
+            if not first:
+                npv = _abs_max(npv, prev[k, i])
+        est[k], rho[k] = _estimate_point(nd, nx, nx if first else npv, K, abs(da - db),
+                                         abs(da), abs(db), abs(xr), first)
 
 
 @_jit
