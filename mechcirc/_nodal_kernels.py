@@ -131,6 +131,35 @@ def _bucket_plan(b_i, b_j, b_s, n_buckets):
     return start, code
 
 
+@_jit_inline
+def _row_sums(acc, code, start, bk, T, X, has_lo, s_col, s_val, s_vh, s_vl):
+    """The four sums by kind of the row of buckets ``bk`` … ``bk + 3`` into ``acc`` (re_hi,
+    re_lo, im_hi, im_lo by kind) from their terms (:func:`_bucket_plan`): +T[e], −T[e]
+    (code n_e + e) and lever stamps (2·n_e + s), each added by TwoSum in order."""
+    n_e, nb = T.shape[0], SOLVE_BLOCK
+    acc[:] = 0.0
+    for kind in range(4):
+        for t in range(start[bk + kind], start[bk + kind + 1]):
+            e = code[t]
+            if e < n_e:
+                for b in range(nb):
+                    _add(acc, kind, b, T[e, 0, b], T[e, 1, b], T[e, 2, b], T[e, 3, b])
+            elif e < 2 * n_e:                   # −y·(x_i − x_j) into the second row
+                e -= n_e
+                for b in range(nb):
+                    _add(acc, kind, b, -T[e, 0, b], -T[e, 1, b], -T[e, 2, b], -T[e, 3, b])
+            else:
+                s = e - 2 * n_e
+                c, v, vh, vl = s_col[s], s_val[s], s_vh[s], s_vl[s]
+                for b in range(nb):
+                    th_r, tl_r = _two_prod(v, vh, vl, X[0, c, b])
+                    th_i, tl_i = _two_prod(v, vh, vl, X[1, c, b])
+                    if has_lo:
+                        tl_r = tl_r + v * X[2, c, b]
+                        tl_i = tl_i + v * X[3, c, b]
+                    _add(acc, kind, b, th_r, tl_r, th_i, tl_i)
+
+
 @_jit
 def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
              e_i, e_j, e_val, e_vh, e_vl, s_col, s_val, s_vh, s_vl, out):
@@ -169,28 +198,7 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
                     v, vh, vl, X[0, i, b], X[1, i, b], X[0, j, b], X[1, j, b], X[2, i, b],
                     X[3, i, b], X[2, j, b], X[3, j, b], has_lo)
         for r in range(n):
-            acc[:] = 0.0
-            for kind in range(4):
-                for t in range(start[4 * r + kind], start[4 * r + kind + 1]):
-                    e = code[t]
-                    if e < n_e:
-                        for b in range(nb):
-                            _add(acc, kind, b, T[e, 0, b], T[e, 1, b], T[e, 2, b], T[e, 3, b])
-                    elif e < 2 * n_e:           # −y·(x_i − x_j) into the second row
-                        e -= n_e
-                        for b in range(nb):
-                            _add(acc, kind, b, -T[e, 0, b], -T[e, 1, b], -T[e, 2, b],
-                                 -T[e, 3, b])
-                    else:
-                        s = e - 2 * n_e
-                        c, v, vh, vl = s_col[s], s_val[s], s_vh[s], s_vl[s]
-                        for b in range(nb):
-                            th_r, tl_r = _two_prod(v, vh, vl, X[0, c, b])
-                            th_i, tl_i = _two_prod(v, vh, vl, X[1, c, b])
-                            if has_lo:
-                                tl_r = tl_r + v * X[2, c, b]
-                                tl_i = tl_i + v * X[3, c, b]
-                            _add(acc, kind, b, th_r, tl_r, th_i, tl_i)
+            _row_sums(acc, code, start, 4 * r, T, X, has_lo, s_col, s_val, s_vh, s_vl)
             for b in range(nb):
                 R[0, b], R[1, b] = _row_residual(acc, 0, b, W[0, b], W[1, b], W[2, b], rhs[r])
             for b in range(m):
@@ -198,14 +206,22 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
 
 
 @_jit_inline
-def _abs_max(m, z):
-    """max(m, |z|) as a running max |x[k, i]| over i takes it (≥ 0.0; NaN once one is):
-    numba's |z| (a hypot) only where |re| + |im| is not below m (|z| ≤ |re| + |im|:
-    elsewhere |z| < m)."""
+def _max_step(m, z):
+    """max(m, |z|) as a running max of |z| takes it (NaN once one is): numba's |z| (a hypot)
+    only where |re| + |im| is not below m (|z| ≤ |re| + |im|: elsewhere |z| < m)."""
     if not (abs(z.real) + abs(z.imag) < m):
         v = abs(z)
         if v > m or np.isnan(v):
             return v
+    return m
+
+
+@_jit_inline
+def _abs_max(x, k):
+    """max |x[k, i]| over i (≥ 0.0; NaN if one is), by :func:`_max_step`."""
+    m = 0.0
+    for i in range(x.shape[1]):
+        m = _max_step(m, x[k, i])
     return m
 
 
@@ -225,10 +241,10 @@ def estimate(xh, xl, d, prev, r, a, b, lo, first, est, rho):
         nx = nd = npv = 0.0
         for i in range(n):
             xr += xh[k, i] * r[k, i]
-            nx = _abs_max(nx, xh[k, i])
-            nd = _abs_max(nd, d[k, i])
+            nx = _max_step(nx, xh[k, i])
+            nd = _max_step(nd, d[k, i])
             if not first:
-                npv = _abs_max(npv, prev[k, i])
+                npv = _max_step(npv, prev[k, i])
         est[k], rho[k] = _estimate_point(nd, nx, nx if first else npv, K, abs(da - db),
                                          abs(da), abs(db), abs(xr), first)
 
