@@ -376,16 +376,33 @@ def band_assemble_factor(dc, m, kk, omega, dest_c, dest_r, kl, F, ipiv, ok):
 
 
 @_jit_inline
+def _consecutive(w):
+    """Whether the ω ``w`` are consecutive (w[b] = w[0] + b)."""
+    step = True
+    for b in range(1, w.size):
+        step = step and w[b] - w[b - 1] == 1
+    return step
+
+
+@_jit_inline
+def _gather_room(F, rows):
+    """Scratch (G, P) for :func:`_block_factors`: room for a block's factors where a block
+    of ``rows`` is not consecutive, none otherwise (the usual case: nothing to allocate)."""
+    need = 0
+    for k0 in range(0, rows.size, SOLVE_BLOCK):
+        need = need if _consecutive(rows[k0:k0 + SOLVE_BLOCK]) else F.shape[1]
+    return (np.empty((2, need, F.shape[2], SOLVE_BLOCK)),
+            np.empty((need, SOLVE_BLOCK), dtype=np.int64))
+
+
+@_jit_inline
 def _block_factors(fr, fi, ipiv, w, G, P):
     """The factors of the ω ``w`` (one block): (real parts, imaginary parts, pivots, the
     first ω's place) read in place when the ω are consecutive (the usual case), else
     copied into the scratch ``G``, ``P`` (gathered once, not at every use)."""
-    nb = w.size
-    step = 1
-    for b in range(1, nb):
-        step = step if w[b] - w[b - 1] == 1 else 0
-    if step:
+    if _consecutive(w):
         return fr, fi, ipiv, np.uint64(w[0])
+    nb = w.size
     for j in range(fr.shape[0]):
         for b in range(nb):
             P[j, b] = ipiv[j, w[b]]
@@ -401,9 +418,8 @@ def band_solve_perm(F, kl, ipiv, rows, p, r, out):
     rows and columns in the order ``p``): each ω's operations in LAPACK's zgbtrs order
     (complex products and quotients as numba forms them), for :data:`SOLVE_BLOCK` ω at a
     time, ω innermost and the row swaps by selects (as :func:`_band_lu`)."""
-    n = F.shape[1]
-    _solve_blocks(F, kl, ipiv, rows, p, r, out, np.empty((2, n, SOLVE_BLOCK)),
-                  np.empty((2, n, F.shape[2], SOLVE_BLOCK)), np.empty((n, SOLVE_BLOCK), np.int64))
+    G, P = _gather_room(F, rows)
+    _solve_blocks(F, kl, ipiv, rows, p, r, out, np.empty((2, F.shape[1], SOLVE_BLOCK)), G, P)
 
 
 @_jit
@@ -462,8 +478,7 @@ def band_bound(F, kl, ipiv, rows, p, x, d, out):
     u = np.empty((n, SOLVE_BLOCK))
     ad = np.empty((n, SOLVE_BLOCK))         # |d| in the order p
     acc = np.empty(SOLVE_BLOCK)
-    G = np.empty((2, n, F.shape[2], SOLVE_BLOCK))
-    P = np.empty((n, SOLVE_BLOCK), dtype=np.int64)
+    G, P = _gather_room(F, rows)
     for k0 in range(0, rows.size, SOLVE_BLOCK):
         nb = min(SOLVE_BLOCK, rows.size - k0)
         fr, fi, piv, q = _block_factors(F[0], F[1], ipiv, rows[k0:k0 + nb], G, P)
