@@ -108,6 +108,58 @@ def _block_in(omega, xr, xi, xlr, xli, k0, m, W, X):
             X[2, i, b], X[3, i, b] = xlr[k0 + b, i], xli[k0 + b, i]
 
 
+@_jit_inline
+def _bucket_plan(b_i, b_j, b_s, n_buckets):
+    """(start, code): the terms of bucket k at ``code[start[k]:start[k + 1]]`` in the order
+    they are added — the + terms by element (code e), then the − terms (n_e + e), then
+    the lever stamps (2·n_e + s) — by a stable counting sort (bucket n_buckets, the
+    reference's row, dropped)."""
+    n_e = b_i.size
+    start = np.zeros(n_buckets + 3, dtype=np.int64)     # (the last: the dropped, counted)
+    for src in (b_i, b_j, b_s):
+        for t in range(src.size):
+            start[src[t] + 2] += 1
+    for k in range(2, n_buckets + 2):
+        start[k] += start[k - 1]
+    code = np.empty(start[n_buckets + 1], dtype=np.int64)
+    for base, src in ((0, b_i), (n_e, b_j), (2 * n_e, b_s)):
+        for t in range(src.size):
+            bk = src[t]
+            if bk < n_buckets:
+                code[start[bk + 1]] = base + t
+                start[bk + 1] += 1
+    return start, code
+
+
+@_jit_inline
+def _row_sums(acc, code, start, bk, T, X, has_lo, s_col, s_val, s_vh, s_vl):
+    """The four sums by kind of the row of buckets ``bk`` … ``bk + 3`` into ``acc`` (re_hi,
+    re_lo, im_hi, im_lo by kind) from their terms (:func:`_bucket_plan`): +T[e], −T[e]
+    (code n_e + e) and lever stamps (2·n_e + s), each added by TwoSum in order."""
+    n_e, nb = T.shape[0], SOLVE_BLOCK
+    acc[:] = 0.0
+    for kind in range(4):
+        for t in range(start[bk + kind], start[bk + kind + 1]):
+            e = code[t]
+            if e < n_e:
+                for b in range(nb):
+                    _add(acc, kind, b, T[e, 0, b], T[e, 1, b], T[e, 2, b], T[e, 3, b])
+            elif e < 2 * n_e:                   # −y·(x_i − x_j) into the second row
+                e -= n_e
+                for b in range(nb):
+                    _add(acc, kind, b, -T[e, 0, b], -T[e, 1, b], -T[e, 2, b], -T[e, 3, b])
+            else:
+                s = e - 2 * n_e
+                c, v, vh, vl = s_col[s], s_val[s], s_vh[s], s_vl[s]
+                for b in range(nb):
+                    th_r, tl_r = _two_prod(v, vh, vl, X[0, c, b])
+                    th_i, tl_i = _two_prod(v, vh, vl, X[1, c, b])
+                    if has_lo:
+                        tl_r = tl_r + v * X[2, c, b]
+                        tl_i = tl_i + v * X[3, c, b]
+                    _add(acc, kind, b, th_r, tl_r, th_i, tl_i)
+
+
 @_jit
 def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
              e_i, e_j, e_val, e_vh, e_vl, s_col, s_val, s_vh, s_vl, out):
@@ -120,68 +172,56 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
     the buckets 4·row + kind (kind: mass, spring, damper, lever) of +element e,
     −element e and lever stamp s (4·n: the reference's row, dropped).  Each
     bucket receives its terms in the numpy code's order — the + terms by
-    element, then the − terms, then the lever stamps — and adds them by TwoSum
-    into ``acc`` (re_hi, re_lo, im_hi, im_lo by bucket).  Each residual,
-    rounded to its real parts re and im, is stored as numpy forms
-    ``re + 1j * im``, so a signed zero or a NaN comes out as the numpy code's.
+    element, then the − terms, then the lever stamps (:func:`_bucket_plan`) — and
+    adds them by TwoSum into ``acc`` (re_hi, re_lo, im_hi, im_lo by kind), one row
+    at a time: the terms y·(x_i − x_j) formed once for the block (``T``), each row's
+    four sums then its residual formed from them.  Each residual, rounded to its real
+    parts re and im, is stored as numpy forms ``re + 1j * im``, so a signed zero or a
+    NaN comes out as the numpy code's.
     """
     n_w, n = out.shape
-    nb, drop = SOLVE_BLOCK, 4 * n
+    n_e, nb = e_i.size, SOLVE_BLOCK
+    start, code = _bucket_plan(b_i, b_j, b_s, 4 * n)
     X = np.zeros((4, n + 1, nb))
-    T = np.empty((e_i.size, 4, nb))             # +y·(x_i − x_j), formed once
-    acc = np.empty((4 * n + 4, 4, nb))
+    T = np.empty((n_e, 4, nb))                  # +y·(x_i − x_j), formed once
+    acc = np.empty((4, 4, nb))                  # one row's sums by kind
     W = np.ones((3, nb))                        # ω, split
-    R = np.empty((2, n, nb))
+    R = np.empty((2, nb))                     # one row's residuals
     for k0 in range(0, n_w, nb):
         m = min(nb, n_w - k0)                   # (past m, the last block's stale ω: unused)
         _block_in(omega, xr, xi, xlr, xli, k0, m, W, X)
-        acc[:] = 0.0
-        for e in range(e_i.size):
-            i, j, bk = e_i[e], e_j[e], b_i[e]
+        for e in range(n_e):
+            i, j = e_i[e], e_j[e]
             v, vh, vl = e_val[e], e_vh[e], e_vl[e]
             for b in range(nb):
                 T[e, 0, b], T[e, 1, b], T[e, 2, b], T[e, 3, b] = _element_term(
                     v, vh, vl, X[0, i, b], X[1, i, b], X[0, j, b], X[1, j, b], X[2, i, b],
                     X[3, i, b], X[2, j, b], X[3, j, b], has_lo)
-            if bk != drop:
-                for b in range(nb):
-                    _add(acc, bk, b, T[e, 0, b], T[e, 1, b], T[e, 2, b], T[e, 3, b])
-        for e in range(e_i.size):               # −y·(x_i − x_j) into the second row
-            bk = b_j[e]
-            if bk != drop:
-                for b in range(nb):
-                    _add(acc, bk, b, -T[e, 0, b], -T[e, 1, b], -T[e, 2, b], -T[e, 3, b])
-        for s in range(s_col.size):
-            c, bk = s_col[s], b_s[s]
-            v, vh, vl = s_val[s], s_vh[s], s_vl[s]
-            if bk != drop:
-                for b in range(nb):
-                    th_r, tl_r = _two_prod(v, vh, vl, X[0, c, b])
-                    th_i, tl_i = _two_prod(v, vh, vl, X[1, c, b])
-                    if has_lo:
-                        tl_r = tl_r + v * X[2, c, b]
-                        tl_i = tl_i + v * X[3, c, b]
-                    _add(acc, bk, b, th_r, tl_r, th_i, tl_i)
         for r in range(n):
+            _row_sums(acc, code, start, 4 * r, T, X, has_lo, s_col, s_val, s_vh, s_vl)
             for b in range(nb):
-                R[0, r, b], R[1, r, b] = _row_residual(acc, r, b, W[0, b], W[1, b], W[2, b],
-                                                       rhs[r])
-        for b in range(m):
-            for r in range(n):
-                out[k0 + b, r] = complex(R[0, r, b], R[1, r, b])
+                R[0, b], R[1, b] = _row_residual(acc, 0, b, W[0, b], W[1, b], W[2, b], rhs[r])
+            for b in range(m):
+                out[k0 + b, r] = complex(R[0, b], R[1, b])
+
+
+@_jit_inline
+def _max_step(m, z):
+    """max(m, |z|) as a running max of |z| takes it (NaN once one is): numba's |z| (a hypot)
+    only where |re| + |im| is not below m (|z| ≤ |re| + |im|: elsewhere |z| < m)."""
+    if not (abs(z.real) + abs(z.imag) < m):
+        v = abs(z)
+        if v > m or np.isnan(v):
+            return v
+    return m
 
 
 @_jit_inline
 def _abs_max(x, k):
-    """max |x[k, i]| over i (≥ 0.0; NaN if one is): numba's |z| (a hypot) only where
-    |re| + |im| is not below the largest so far (|z| ≤ |re| + |im|: elsewhere |z| < m)."""
+    """max |x[k, i]| over i (≥ 0.0; NaN if one is), by :func:`_max_step`."""
     m = 0.0
     for i in range(x.shape[1]):
-        z = x[k, i]
-        if not (abs(z.real) + abs(z.imag) < m):
-            v = abs(z)
-            if v > m or np.isnan(v):
-                m = v
+        m = _max_step(m, x[k, i])
     return m
 
 
@@ -190,18 +230,23 @@ def estimate(xh, xl, d, prev, r, a, b, lo, first, est, rho):
     """:func:`mechcirc._nodal_steps.estimate_point` at each ω (rows of xh + xl, the
     correction ``d``, the one before it ``prev`` unless ``first``, the residual ``r``; the
     drive's ends ``a``, ``b``, n for the reference) into ``est`` and ``rho``:
-    :func:`mechcirc.nodal._estimate`'s reductions by loops."""
+    :func:`mechcirc.nodal._estimate`'s reductions by loops, the four of a row in one pass
+    (each in its own order; their chains of dependent additions and comparisons overlap)."""
     n = xh.shape[1]
     for k in range(est.size):
         K = abs(_dd_difference(_at(xh, k, a, n), _at(xh, k, b, n), _at(xl, k, a, n),
                                _at(xl, k, b, n), lo))
         da, db = _at(d, k, a, n), _at(d, k, b, n)
         xr = 0j
+        nx = nd = npv = 0.0
         for i in range(n):
             xr += xh[k, i] * r[k, i]
-        nx = _abs_max(xh, k)
-        est[k], rho[k] = _estimate_point(_abs_max(d, k), nx, nx if first else _abs_max(prev, k),
-                                         K, abs(da - db), abs(da), abs(db), abs(xr), first)
+            nx = _max_step(nx, xh[k, i])
+            nd = _max_step(nd, d[k, i])
+            if not first:
+                npv = _max_step(npv, prev[k, i])
+        est[k], rho[k] = _estimate_point(nd, nx, nx if first else npv, K, abs(da - db),
+                                         abs(da), abs(db), abs(xr), first)
 
 
 @_jit
@@ -261,15 +306,14 @@ def _band_lu(re, im, kl, ipiv, ok, best, jp, rr, ri):
     """
     n, _, nw = re.shape
     kv = 2 * kl
-    for j in range(n):
+    for j in range(n):                  # (indexed in place: a view costs a reference count)
         km = min(kl, n - 1 - j)
         ju = min(j + kv, n - 1)
         best[:] = -1.0
         jp[:] = 0
         for t in range(km + 1):
-            pr, pi = re[j, kv + t], im[j, kv + t]
             for k in range(nw):
-                m = abs(pr[k]) + abs(pi[k])
+                m = abs(re[j, kv + t, k]) + abs(im[j, kv + t, k])
                 g = m > best[k]
                 best[k] = m if g else best[k]
                 jp[k] = t if g else jp[k]
@@ -278,34 +322,31 @@ def _band_lu(re, im, kl, ipiv, ok, best, jp, rr, ri):
             ok[k] = ok[k] and best[k] != 0.0 and np.isfinite(best[k])
         for c in range(j, ju + 1):
             d = kv + j - c
-            xr, xi = re[c, d], im[c, d]
             for t in range(1, km + 1):
-                yr, yi = re[c, d + t], im[c, d + t]
                 for k in range(nw):
                     sw = jp[k] == t
-                    xr[k], yr[k] = (yr[k], xr[k]) if sw else (xr[k], yr[k])
-                    xi[k], yi[k] = (yi[k], xi[k]) if sw else (xi[k], yi[k])
+                    xr, yr, xi, yi = re[c, d, k], re[c, d + t, k], im[c, d, k], im[c, d + t, k]
+                    re[c, d, k], re[c, d + t, k] = (yr, xr) if sw else (xr, yr)
+                    im[c, d, k], im[c, d + t, k] = (yi, xi) if sw else (xi, yi)
         if km > 0:
             for k in range(nw):
                 rr[k], ri[k] = _cdiv(1.0, 0.0, re[j, kv, k], im[j, kv, k], ok[k])
             for t in range(1, km + 1):
-                lr, li = re[j, kv + t], im[j, kv + t]
                 for k in range(nw):
-                    a, b = lr[k], li[k]
-                    lr[k] = a * rr[k] - b * ri[k]
-                    li[k] = a * ri[k] + b * rr[k]
+                    a, b = re[j, kv + t, k], im[j, kv + t, k]
+                    re[j, kv + t, k] = a * rr[k] - b * ri[k]
+                    im[j, kv + t, k] = a * ri[k] + b * rr[k]
             for c in range(j + 1, ju + 1):
                 d = kv + j - c
-                ur, ui = re[c, d], im[c, d]
                 for t in range(1, km + 1):
-                    lr, li = re[j, kv + t], im[j, kv + t]
-                    vr, vi = re[c, d + t], im[c, d + t]
                     for k in range(nw):
-                        nz = ur[k] != 0.0 or ui[k] != 0.0
-                        a = vr[k] - (lr[k] * ur[k] - li[k] * ui[k])
-                        b = vi[k] - (lr[k] * ui[k] + li[k] * ur[k])
-                        vr[k] = a if nz else vr[k]
-                        vi[k] = b if nz else vi[k]
+                        ur, ui = re[c, d, k], im[c, d, k]
+                        lr, li = re[j, kv + t, k], im[j, kv + t, k]
+                        nz = ur != 0.0 or ui != 0.0
+                        a = re[c, d + t, k] - (lr * ur - li * ui)
+                        b = im[c, d + t, k] - (lr * ui + li * ur)
+                        re[c, d + t, k] = a if nz else re[c, d + t, k]
+                        im[c, d + t, k] = b if nz else im[c, d + t, k]
 
 
 @_jit
@@ -334,19 +375,65 @@ def band_assemble_factor(dc, m, kk, omega, dest_c, dest_r, kl, F, ipiv, ok):
              np.empty(nw))
 
 
+@_jit_inline
+def _consecutive(w):
+    """Whether the ω ``w`` are consecutive (w[b] = w[0] + b)."""
+    step = True
+    for b in range(1, w.size):
+        step = step and w[b] - w[b - 1] == 1
+    return step
+
+
+@_jit_inline
+def _gather_room(F, rows):
+    """Scratch (G, P) for :func:`_block_factors`: room for a block's factors where a block
+    of ``rows`` is not consecutive, none otherwise (the usual case: nothing to allocate).
+    (In the solve the copy costs no more than reading through ``rows``: its loops then
+    vectorise.  Every other ω of the 999-element ladder's solves: 5.6–6.1 ms, 5.4–6.8 so.)"""
+    need = 0
+    for k0 in range(0, rows.size, SOLVE_BLOCK):
+        need = need if _consecutive(rows[k0:k0 + SOLVE_BLOCK]) else F.shape[1]
+    return (np.empty((2, need, F.shape[2], SOLVE_BLOCK)),
+            np.empty((need, SOLVE_BLOCK), dtype=np.int64))
+
+
+@_jit_inline
+def _block_factors(fr, fi, ipiv, w, G, P):
+    """The factors of the ω ``w`` (one block): (real parts, imaginary parts, pivots, the
+    first ω's place) read in place when the ω are consecutive (the usual case), else
+    copied into the scratch ``G``, ``P`` (gathered once, not at every use)."""
+    if _consecutive(w):
+        return fr, fi, ipiv, np.uint64(w[0])
+    nb = w.size
+    for j in range(fr.shape[0]):
+        for b in range(nb):
+            P[j, b] = ipiv[j, w[b]]
+        for d in range(fr.shape[1]):
+            for b in range(nb):
+                G[0, j, d, b], G[1, j, d, b] = fr[j, d, w[b]], fi[j, d, w[b]]
+    return G[0], G[1], P, np.uint64(0)
+
+
 @_jit
 def band_solve_perm(F, kl, ipiv, rows, p, r, out):
     """out[k, p] = A_p⁻¹ r[k, p] with the factors ``F[..., rows[k]]`` of :func:`_band_lu` (A's
     rows and columns in the order ``p``): each ω's operations in LAPACK's zgbtrs order
     (complex products and quotients as numba forms them), for :data:`SOLVE_BLOCK` ω at a
     time, ω innermost and the row swaps by selects (as :func:`_band_lu`)."""
+    G, P = _gather_room(F, rows)
+    _solve_blocks(F, kl, ipiv, rows, p, r, out, np.empty((2, F.shape[1], SOLVE_BLOCK)), G, P)
+
+
+@_jit
+def _solve_blocks(F, kl, ipiv, rows, p, r, out, x, G, P):
+    """:func:`band_solve_perm` with its scratch ``x``, ``G``, ``P`` given: arrays allocated in
+    the kernel itself keep LLVM from vectorising its loops over ω (seen in the assembly)."""
     n = F.shape[1]
     kv = 2 * kl
-    fr, fi = F[0], F[1]
-    xr, xi = np.empty((n, SOLVE_BLOCK)), np.empty((n, SOLVE_BLOCK))
+    xr, xi = x[0], x[1]
     for k0 in range(0, rows.size, SOLVE_BLOCK):
         nb = min(SOLVE_BLOCK, rows.size - k0)
-        w = rows[k0:k0 + nb]
+        fr, fi, piv, q = _block_factors(F[0], F[1], ipiv, rows[k0:k0 + nb], G, P)
         for i in range(n):
             for b in range(nb):
                 xr[i, b], xi[i, b] = r[k0 + b, p[i]].real, r[k0 + b, p[i]].imag
@@ -354,25 +441,25 @@ def band_solve_perm(F, kl, ipiv, rows, p, r, out):
             km = min(kl, n - 1 - j)
             for t in range(1, km + 1):
                 for b in range(nb):
-                    sw = ipiv[j, w[b]] - j == t
+                    sw = piv[j, q + np.uint64(b)] - j == t
                     xr[j, b], xr[j + t, b] = (xr[j + t, b], xr[j, b]) if sw else (xr[j, b], xr[j + t, b])
                     xi[j, b], xi[j + t, b] = (xi[j + t, b], xi[j, b]) if sw else (xi[j, b], xi[j + t, b])
             for t in range(1, km + 1):
                 for b in range(nb):
-                    lr, li, ar, ai = fr[j, kv + t, w[b]], fi[j, kv + t, w[b]], xr[j, b], xi[j, b]
+                    lr, li, ar, ai = fr[j, kv + t, q + np.uint64(b)], fi[j, kv + t, q + np.uint64(b)], xr[j, b], xi[j, b]
                     xr[j + t, b] -= lr * ar - li * ai
                     xi[j + t, b] -= lr * ai + li * ar
         for j in range(n - 1, -1, -1):         # U, by columns
             for b in range(nb):
-                xr[j, b], xi[j, b] = _cdiv(xr[j, b], xi[j, b], fr[j, kv, w[b]], fi[j, kv, w[b]],
+                xr[j, b], xi[j, b] = _cdiv(xr[j, b], xi[j, b], fr[j, kv, q + np.uint64(b)], fi[j, kv, q + np.uint64(b)],
                                            True)
             for i in range(max(0, j - kv), j):
                 for b in range(nb):
-                    ur, ui = fr[j, kv + i - j, w[b]], fi[j, kv + i - j, w[b]]
+                    ur, ui = fr[j, kv + i - j, q + np.uint64(b)], fi[j, kv + i - j, q + np.uint64(b)]
                     xr[i, b] -= ur * xr[j, b] - ui * xi[j, b]
                     xi[i, b] -= ur * xi[j, b] + ui * xr[j, b]
-        for b in range(nb):
-            for i in range(n):
+        for i in range(n):
+            for b in range(nb):
                 out[k0 + b, p[i]] = complex(xr[i, b], xi[i, b])
 
 
@@ -387,7 +474,9 @@ def band_bound(F, kl, ipiv, rows, p, x, d, out):
     """out[k] = |x|ᵀP̃|L||U||d| with the factors ``F[..., rows[k]]`` of :func:`_band_lu` (|z| as
     |re| + |im|; x and d in A's order, the factors in the order ``p``): what
     :func:`mechcirc._nodal_solvers.band_bound_batch` forms from numpy's factors, for
-    :data:`SOLVE_BLOCK` ω at a time, ω innermost (each ω's sums in the same order)."""
+    :data:`SOLVE_BLOCK` ω at a time, ω innermost (each ω's sums in the same order).  The
+    factors are read through ``rows`` where they are: each once (a copy of a block's, as
+    the solve makes where its ω are not consecutive, cost more than it saved)."""
     n = F.shape[1]
     kv = 2 * kl
     fr, fi = F[0], F[1]
@@ -401,7 +490,8 @@ def band_bound(F, kl, ipiv, rows, p, x, d, out):
             for b in range(nb):
                 ad[j, b] = _l1(d[k0 + b, p[j]])
         for i in range(n):                  # |U||d|: U[i, j] is F[:, j, kv + i − j]
-            u[i, :nb] = 0.0
+            for b in range(nb):             # (loops, not slices: a view costs a reference count)
+                u[i, b] = 0.0
             for j in range(i, min(n, i + kv + 1)):
                 for b in range(nb):
                     u[i, b] += (abs(fr[j, kv + i - j, w[b]]) + abs(fi[j, kv + i - j, w[b]])) \
@@ -415,7 +505,8 @@ def band_bound(F, kl, ipiv, rows, p, x, d, out):
                 keep = u[j, b]
                 u[j, b] = u[q, b]
                 u[q, b] = keep
-        acc[:nb] = 0.0
+        for b in range(nb):
+            acc[b] = 0.0
         for i in range(n):
             for b in range(nb):
                 acc[b] += _l1(x[k0 + b, p[i]]) * u[i, b]
