@@ -216,15 +216,6 @@ def _max_step(m, z):
     return m
 
 
-@_jit_inline
-def _abs_max(x, k):
-    """max |x[k, i]| over i (≥ 0.0; NaN if one is), by :func:`_max_step`."""
-    m = 0.0
-    for i in range(x.shape[1]):
-        m = _max_step(m, x[k, i])
-    return m
-
-
 @_jit
 def estimate(xh, xl, d, prev, r, a, b, lo, first, est, rho):
     """:func:`mechcirc._nodal_steps.estimate_point` at each ω (rows of xh + xl, the
