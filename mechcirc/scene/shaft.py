@@ -151,7 +151,8 @@ class ShaftMotion:
         """One row per θ of the steady cycle: ``theta`` [rad], ``time`` [s] and each of
         :meth:`curves`; ``attrs["units"]`` the unit of each column."""
         cols = {"theta": self.theta, "time": self.time, **self.curves()}
-        return data_frame(cols, {"theta": "rad", "time": "s", **self.units})
+        units = {"theta": "rad", "time": "s", **self.units}
+        return data_frame(cols, {c: units.get(c, "") for c in cols})
 
     def summary(self) -> dict:
         """The scalar results and extremes, JSON-ready."""
