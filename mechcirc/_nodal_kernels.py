@@ -241,6 +241,21 @@ def estimate(xh, xl, d, prev, r, a, b, lo, first, est, rho):
 
 
 @_jit
+def update(s, d, xl, lo, e):
+    """s + d = s' + e exactly, s' into ``s`` in place (complex: TwoSum of the real and the
+    imaginary parts, as :func:`mechcirc._dd.two_sum` on complex arrays), then e = xl + e
+    where ``lo``: :func:`mechcirc.nodal.refine_dd`'s step, without numpy's temporaries."""
+    for k in range(s.shape[0]):
+        for i in range(s.shape[1]):
+            hr, lr = _two_sum(s[k, i].real, d[k, i].real)
+            hi, li = _two_sum(s[k, i].imag, d[k, i].imag)
+            if lo:
+                lr, li = xl[k, i].real + lr, xl[k, i].imag + li
+            s[k, i] = complex(hr, hi)
+            e[k, i] = complex(lr, li)
+
+
+@_jit
 def step_bound(omega, xh, xl, d, r, lu, a, b, e_i, e_j, e_abs, s_row, s_col, s_abs, m, out):
     """:func:`mechcirc._nodal_steps.bound_point` at each ω into ``out``: the sums of
     :func:`mechcirc.nodal.first_step_bound` by loops (|z| as |re| + |im|; index n, the

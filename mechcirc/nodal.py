@@ -148,7 +148,7 @@ def kernels(work: int = 0):
 
         if k.HAVE_NUMBA and not _jit.use(
                 "from mechcirc.nodal import warm_kernels; warm_kernels()", k.residual,
-                k.sensitivities, k.estimate, k.step_bound,
+                k.sensitivities, k.estimate, k.update, k.step_bound,
                 k.band_assemble_factor, k.band_solve_perm, k.band_bound):
             # Not compiled yet: numpy now (the same numbers), the kernels compiled
             # into numba's cache by a process of their own for a later sweep.
@@ -451,8 +451,7 @@ def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
     compiled kernels (:func:`kernels`), which run the steps between them too.
     """
     eps = np.finfo(float).eps
-    b = np.repeat(rhs.astype(complex)[None, :], omega.size, axis=0)  # (solves take it as it is)
-    x0 = solve_fn(b)
+    x0 = solve_fn(np.repeat(rhs.astype(complex)[None, :], omega.size, axis=0))
     if not refine:
         # No refinement: the first correction is still the error estimate, from
         # a double-double residual or a float64 one (a sixth of its work); the
@@ -484,10 +483,14 @@ def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
         r = residual(omega[at], xa, xla, rhs)
         d = solve_fn(r) if whole else solve_fn(r, active)
         est[at], rho[at] = _estimate(system, xa, xla, d, prev[at] if step else None, r, kern)
-        with np.errstate(all="ignore"):
-            s, e = two_sum(xa, d)
-        if xla is not None:
-            e = xla + e
+        if kern is not None:                # (in place: xa is xh's or a copy of its rows)
+            s, e = np.ascontiguousarray(xa), np.empty_like(xa)
+            kern.update(s, d, s if xla is None else xla, xla is not None, e)
+        else:
+            with np.errstate(all="ignore"):
+                s, e = two_sum(xa, d)
+            if xla is not None:
+                e = xla + e
         if whole:
             # Every point: the new arrays (each its own) are kept, not copied.
             xh = s

@@ -421,6 +421,32 @@ def test_compiled_residual_is_the_numpy_residual_bit_for_bit(monkeypatch):
             assert compiled.tobytes() == vectorised.tobytes()
 
 
+def test_compiled_update_is_the_numpy_two_sum_bit_for_bit(monkeypatch):
+    """refine_dd's step x + d = s + e (and xl + e after the first step) by the kernel
+    (_nodal_kernels.update, s in place) has the bits of _dd.two_sum on complex arrays:
+    values over 600 decades, signed zeros, cancellation (d = −x), inf and NaN."""
+    pytest.importorskip("numba")
+    monkeypatch.setattr(mechcirc._jit, "COMPILED", True)
+    kern = mechcirc.nodal.kernels(10 ** 9)
+    rng = np.random.default_rng(9)
+    shape = (37, 11)
+
+    def draw():
+        return (rng.standard_normal(shape) + 1j * rng.standard_normal(shape)) \
+            * 10.0 ** rng.uniform(-300, 300, shape)
+    x, d, xl = draw(), draw(), draw()
+    d[::3] = x[::3] * 1e-17 * rng.standard_normal(shape)[::3]
+    d[1::5] = -x[1::5]
+    x[2::7, 0], d[3::7, 1], x[4, 2], d[5, 3], x[6, 4] = -0.0, -0.0, np.inf, np.nan, -np.inf
+    for lo in (False, True):
+        with np.errstate(all="ignore"):
+            s, e = mechcirc._dd.two_sum(x, d)
+            e = xl + e if lo else e
+        s2, e2 = x.copy(), np.empty_like(x)
+        kern.update(s2, d, xl, lo, e2)
+        assert s2.tobytes() == s.tobytes() and e2.tobytes() == e.tobytes()
+
+
 # ------------------------------------------- the numpy banded LU, vectorised over ω
 @pytest.mark.parametrize("kl", [0, 1, 3])
 def test_batched_band_lu_solves_as_numpy_dense_solve(kl):
@@ -761,7 +787,8 @@ def test_warm_kernels_calls_every_nodal_kernel(warm_up_run):
     kernels = sorted(name for name, v in vars(k).items() if isinstance(v, CPUDispatcher)
                      and v.targetoptions.get("inline") != "always")
     assert kernels == ["_solve_blocks", "band_assemble_factor", "band_bound", "band_solve_perm",
-                       "estimate", "residual", "sensitivities", "step_bound"]
+                       "estimate", "residual", "sensitivities", "step_bound",
+                       "update"]
     done = warm_up_run["nodal.warm_kernels, its kernel calls recorded"]
     assert done["error"] is None, done
     assert set(kernels) <= set(done["result"]), done["result"]
