@@ -107,13 +107,19 @@ _CHUNK_TERMS = 2 ** 15
 #: shared out evenly over the fewest chunks.  Each in processes of its own, alternated
 #: (27 Nov, load 3–4), the compiled sweep took at 2¹² 0.74–0.75× its time at 2¹⁶ at
 #: 999 elements, 0.73–0.83× at 45, 0.77× at 9,999 (one ω per chunk); at 8,000 (eighth
-#: session, load 2) 0.91× its time at 2¹² at 99 elements (3 chunks, not 5).
-_KERNEL_CHUNK = 8000
-#: But at least this many ω per chunk of a band: the compiled banded LU's loops over ω
-#: vectorise (at 500 unknowns it factorises 16 ω in 0.55× the time of 8, at 5,000 in
-#: 0.78× the time of 1 ω at a time; 27 Nov, seventh session), more than the larger
-#: chunks' page faults cost (sweeps of 999 and 9,999 elements 0.94× and 0.96× the time
-#: of the former chunks of 8 and 1 ω each solving with its part of 16 ω factorised).
+#: session, load 2) 0.91× its time at 2¹² at 99 elements (3 chunks, not 5).  At 10,400
+#: (sixteenth session, Xeon, load 1–2, alternated with 8,000 three times) the sweeps of 45
+#: and 99 elements take one chunk and two, not two and three: 1.45–1.48 ms against
+#: 1.55–1.57 and 3.22–3.26 against 3.27–3.33 (0 and 321 page faults a sweep against 0 and
+#: 281), 999 and 9,999 elements as many chunks as before.
+_KERNEL_CHUNK = 10400
+#: But at least this many ω per chunk of a band, and a multiple of it: the compiled
+#: banded LU's loops over ω vectorise (at 500 unknowns it factorises 16 ω in 0.55× the
+#: time of 8, at 5,000 in 0.78× the time of 1 ω at a time; 27 Nov, seventh session),
+#: more than the larger chunks' page faults cost (sweeps of 999 and 9,999 elements 0.94×
+#: and 0.96× the time of the former chunks of 8 and 1 ω each solving with its part of 16 ω
+#: factorised);
+#: the kernels take 16 ω side by side (a chunk of 20 at 999 elements: 1.1× the time).
 _KERNEL_MIN_OMEGA = 16
 
 
@@ -207,8 +213,8 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
     # Compiled: no (ω, term) temporaries; the chunk's (ω, n) arrays stay in cache.
     # numpy: the residual's (ω, term) temporaries bound its pieces.
     least = _KERNEL_MIN_OMEGA if kern is not None and solve_with.kind == "band" else 1
-    terms = max(least, _KERNEL_CHUNK // max(1, system.size) if kern is not None
-                else _CHUNK_TERMS // max(1, pat.n_terms + system.size))
+    terms = max(least, (_KERNEL_CHUNK // max(1, system.size) if kern is not None
+                        else _CHUNK_TERMS // max(1, pat.n_terms + system.size)) // least * least)
 
     def residual(w, xh, xl, rhs, exact=True):
         if kern is not None or w.size <= terms:
