@@ -241,28 +241,35 @@ def estimate(xh, xl, d, prev, r, a, b, lo, first, est, rho):
 
 
 @_jit
-def update(s, d, xl, lo, e):
-    """s + d = s' + e exactly, s' into ``s`` in place (complex: TwoSum of the real and the
-    imaginary parts, as :func:`mechcirc._dd.two_sum` on complex arrays), then e = xl + e
-    where ``lo``: :func:`mechcirc.nodal.refine_dd`'s step, without numpy's temporaries."""
+def update(s, d, xl, lo, r, rounding, first):
+    """s + d = s' + e exactly, s' into ``s`` and e (xl + e where ``lo``) into ``r`` in place
+    (complex: TwoSum of the real and the imaginary parts, as :func:`mechcirc._dd.two_sum`
+    on complex arrays): :func:`mechcirc.nodal.refine_dd`'s step without numpy's
+    temporaries, the residual ``r`` no longer needed but, where ``first``, for
+    ``rounding`` = |s'|ᵀ|r| (|z| as |re| + |im|: :func:`step_bound`'s), formed here first."""
     for k in range(s.shape[0]):
+        acc = 0.0
         for i in range(s.shape[1]):
             hr, lr = _two_sum(s[k, i].real, d[k, i].real)
             hi, li = _two_sum(s[k, i].imag, d[k, i].imag)
             if lo:
                 lr, li = xl[k, i].real + lr, xl[k, i].imag + li
             s[k, i] = complex(hr, hi)
-            e[k, i] = complex(lr, li)
+            if first:
+                acc += _l1(s[k, i]) * _l1(r[k, i])
+            r[k, i] = complex(lr, li)
+        rounding[k] = acc
 
 
 @_jit
-def step_bound(omega, xh, xl, d, r, lu, a, b, e_i, e_j, e_abs, s_row, s_col, s_abs, m, out):
+def step_bound(omega, xh, xl, d, rounding, lu, a, b, e_i, e_j, e_abs, s_row, s_col, s_abs, m,
+               out):
     """:func:`mechcirc._nodal_steps.bound_point` at each ω into ``out``: the sums of
     :func:`mechcirc.nodal.first_step_bound` by loops (|z| as |re| + |im|; index n, the
-    reference, reads 0: ``a``, ``b`` too)."""
+    reference, reads 0: ``a``, ``b`` too), |x|ᵀ|r̂| given (:func:`update`'s)."""
     c, n = xh.shape
     for k in range(c):
-        by_c = by_m = by_k = lever = rounding = 0.0
+        by_c = by_m = by_k = lever = 0.0
         for e in range(e_i.size):
             i, j = e_i[e], e_j[e]
             t = (_l1(_at(xh, k, i, n)) + _l1(_at(xh, k, j, n))) * \
@@ -272,11 +279,9 @@ def step_bound(omega, xh, xl, d, r, lu, a, b, e_i, e_j, e_abs, s_row, s_col, s_a
             by_k += t * e_abs[e, 2]
         for s in range(s_row.size):
             lever += _l1(_at(xh, k, s_row[s], n)) * _l1(_at(d, k, s_col[s], n)) * s_abs[s]
-        for i in range(n):
-            rounding += _l1(xh[k, i]) * _l1(r[k, i])
         K = abs(_dd_difference(_at(xh, k, a, n), _at(xh, k, b, n), _at(xl, k, a, n),
                                _at(xl, k, b, n), True))
-        out[k] = _bound_point(lu[k], rounding, by_c, by_m, by_k, lever, abs(omega[k]), K, n, m)
+        out[k] = _bound_point(lu[k], rounding[k], by_c, by_m, by_k, lever, abs(omega[k]), K, n, m)
 
 
 @_jit_inline

@@ -423,8 +423,10 @@ def test_compiled_residual_is_the_numpy_residual_bit_for_bit(monkeypatch):
 
 def test_compiled_update_is_the_numpy_two_sum_bit_for_bit(monkeypatch):
     """refine_dd's step x + d = s + e (and xl + e after the first step) by the kernel
-    (_nodal_kernels.update, s in place) has the bits of _dd.two_sum on complex arrays:
-    values over 600 decades, signed zeros, cancellation (d = −x), inf and NaN."""
+    (_nodal_kernels.update: s into x, e into the residual's array) has the bits of
+    _dd.two_sum on complex arrays: values over 600 decades, signed zeros, cancellation
+    (d = −x), inf and NaN; and the first step's |s|ᵀ|r| (for the first-step bound, formed
+    before r is overwritten) is the row's sum in order of (|re| + |im|) products."""
     pytest.importorskip("numba")
     monkeypatch.setattr(mechcirc._jit, "COMPILED", True)
     kern = mechcirc.nodal.kernels(10 ** 9)
@@ -434,7 +436,7 @@ def test_compiled_update_is_the_numpy_two_sum_bit_for_bit(monkeypatch):
     def draw():
         return (rng.standard_normal(shape) + 1j * rng.standard_normal(shape)) \
             * 10.0 ** rng.uniform(-300, 300, shape)
-    x, d, xl = draw(), draw(), draw()
+    x, d, xl, r = draw(), draw(), draw(), draw() * 1e-3
     d[::3] = x[::3] * 1e-17 * rng.standard_normal(shape)[::3]
     d[1::5] = -x[1::5]
     x[2::7, 0], d[3::7, 1], x[4, 2], d[5, 3], x[6, 4] = -0.0, -0.0, np.inf, np.nan, -np.inf
@@ -442,9 +444,15 @@ def test_compiled_update_is_the_numpy_two_sum_bit_for_bit(monkeypatch):
         with np.errstate(all="ignore"):
             s, e = mechcirc._dd.two_sum(x, d)
             e = xl + e if lo else e
-        s2, e2 = x.copy(), np.empty_like(x)
-        kern.update(s2, d, xl, lo, e2)
+        s2, e2, rounding = x.copy(), r.copy(), np.empty(shape[0])
+        kern.update(s2, d, xl, lo, e2, rounding, True)
         assert s2.tobytes() == s.tobytes() and e2.tobytes() == e.tobytes()
+        for k in range(shape[0]):
+            want = 0.0
+            for a, b in zip(s[k].tolist(), r[k].tolist()):     # (Python floats)
+                want += (abs(a.real) + abs(a.imag)) * (abs(b.real) + abs(b.imag))
+            assert np.float64(want).tobytes() == rounding[k].tobytes() or \
+                (np.isnan(want) and np.isnan(rounding[k]))
 
 
 # ------------------------------------------- the numpy banded LU, vectorised over ω
