@@ -130,7 +130,10 @@ def loaded_groups(groups: Sequence[Sequence[tuple[str, str]]], a: str, b: str,
     # A lever whose sides share a node (p2 = s2 = '0') has a pair (u, u) in its
     # clique: it couples nothing and belongs to no block, so it is not asked for.
     # A pair (an edge) lies in the block when both its nodes do: two blocks share
-    # at most one node, so an edge between two of a block's nodes is the block's.
+    # at most one node, so an edge between two of a block's nodes is the block's
+    # (every group, where the block holds every node).
+    if len(block) == len(adj):
+        return list(range(len(groups)))
     return [i for i, pairs in enumerate(groups)
             if all(u in block and w in block for u, w in pairs if u != w)]
 
