@@ -111,7 +111,11 @@ _CHUNK_TERMS = 2 ** 15
 #: (sixteenth session, Xeon, load 1–2, alternated with 8,000 three times) the sweeps of 45
 #: and 99 elements take one chunk and two, not two and three: 1.45–1.48 ms against
 #: 1.55–1.57 and 3.22–3.26 against 3.27–3.33 (0 and 321 page faults a sweep against 0 and
-#: 281), 999 and 9,999 elements as many chunks as before.
+#: 281), 999 and 9,999 elements as many chunks as before.  The factors are freed before
+#: :meth:`_Solved.store` makes its arrays: a chunk's heap then stays below glibc's trim
+#: threshold (twice the largest block freed, the factors), so a sweep does not fault its
+#: scratch in again (99 elements alone in a process: 0 page faults a sweep, were 281;
+#: 2.79–2.90 ms against 3.17–3.23; after a 45-element run still 278).
 _KERNEL_CHUNK = 10400
 #: But at least this many ω per chunk of a band, and a multiple of it: the compiled
 #: banded LU's loops over ω vectorise (at 500 unknowns it factorises 16 ω in 0.55× the
@@ -191,12 +195,12 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
     """Factor, solve and refine at each ω (real or complex, already checked) of ``omega[at]``
     (default all), chunk by chunk.
 
-    Returns (K, error of the solve, S, S_data, x rows or None, the rows of x
-    at ``keep``), NaN and inf off ``at``; S_data (:meth:`Pattern.sensitivities`)
-    only with ``data``, NaN otherwise (a sweep's error does not use it).  What does not change
-    with ω — the pattern, the solver's choice and ordering, the residual's
-    plan — comes from :func:`pattern` and :func:`solver`.  The compiled
-    kernels serve the sparse path at real ω (:func:`kernels`).
+    Returns (K, error of the solve, S, S_data, x rows or None, the rows of x at ``keep``),
+    NaN and inf off ``at``; S_data (:meth:`Pattern.sensitivities`) only with ``data``, NaN
+    otherwise (a sweep's error does not use it).  What does not change with ω — the
+    pattern, the solver's choice and ordering, the residual's plan — comes from
+    :func:`pattern` and :func:`solver`.  The compiled kernels serve the sparse path at real
+    ω (:func:`kernels`).
     """
     pat = pattern(system)
     rhs = system.injection()
@@ -228,8 +232,7 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
         return refine_dd(solve_fn, residual, w, rhs, system, refine, steps, float64=float64,
                          kern=kern)
 
-    # The numpy banded LU loops over the columns in Python: as many ω at once
-    # as its memory bound allows (the residual goes in pieces, above).
+    # numpy's banded LU loops over columns: as many ω as its memory allows (residual: above).
     chunk = solve_with.batch_chunk if kern is None and solve_with.kind == "band" \
         and solve_with.batch_chunk else min(solve_with.max_chunk, terms)
     chunk = -(-at.size // -(-at.size // chunk)) if at.size else chunk    # even shares
@@ -240,11 +243,7 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
         sel = every[good]
         if sel.size:
             r = refined(solve_fn, omega[sel])
-            # The factors freed before store's arrays are made: the chunk's heap then stays
-            # below glibc's trim threshold (twice the factors' size, the largest block), so
-            # a sweep does not fault its scratch in again (99 elements: 0 page faults a
-            # sweep, were 281; 2.75 ms against 3.19).
-            solve_fn = None
+            solve_fn = None         # (the factors freed before store: see _KERNEL_CHUNK)
             if solve_with.kind == "superlu":
                 _strict_retry(solve_with, kern, omega[sel], r, refined)
             out.store(sel, *r)
@@ -563,8 +562,7 @@ def first_step_bound(system: NodalSystem, omega: NDArray, xh: NDArray, xl: NDArr
     xh, xl : ndarray of complex, shape (c, n)
         x₁ in double-double.
     d, r : ndarray of complex, shape (c, n)
-        The first correction and the residual it was solved from (with ``kern``, r is
-        |x₁|ᵀ|r| instead, shape (c,): :func:`mechcirc._nodal_kernels.update`'s).
+        The first correction and its residual (with ``kern``: |x₁|ᵀ|r|, shape (c,)).
     lu : ndarray, shape (c,)
         |x|ᵀP̃|L||U||d| (:func:`mechcirc._nodal_solvers.band_bound_batch`).
     kern : module or None
