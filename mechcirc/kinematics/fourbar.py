@@ -323,6 +323,12 @@ class FourBar:
         a, b, c, d = self.crank, self.coupler, self.rocker, self.frame
         return abs(d - a) >= abs(b - c) and d + a <= b + c
 
+    @property
+    def is_full_turn_crank_rocker(self) -> bool:
+        """True for a crank-rocker whose crank turns fully: the linkage of the dead centres and
+        the swing (:meth:`dead_centres`), the beat-up drive and the synthesis."""
+        return self.linkage_type == "crank-rocker" and self.crank_rotates_fully
+
     def crank_range(self) -> tuple[float, float]:
         """Reachable crank angles as ``(theta_lo, theta_hi)`` [rad].
 
@@ -492,13 +498,6 @@ class FourBar:
         return float(s.phi4), float(s.mu), float(s.nu)
 
     # ------------------------------------------------------------- summaries
-    def _require_crank_rocker(self, what: str):
-        if self.linkage_type != "crank-rocker" or not self.crank_rotates_fully:
-            raise GeometryError(
-                f"{what} is defined for a crank-rocker only; this four-bar "
-                f"(a={self.crank:g}, b={self.coupler:g}, c={self.rocker:g}, d={self.frame:g}) "
-                f"is a {self.grashof_class} {self.linkage_type}")
-
     def dead_centres(self) -> tuple[DeadCentre, DeadCentre]:
         """Front (crank and coupler extended) and back (folded) dead centres.
 
@@ -513,7 +512,11 @@ class FourBar:
         GeometryError
             The linkage is not a crank-rocker.
         """
-        self._require_crank_rocker("a dead centre")
+        if not self.is_full_turn_crank_rocker:
+            raise GeometryError(
+                f"a dead centre is defined for a crank-rocker only; this four-bar "
+                f"(a={self.crank:g}, b={self.coupler:g}, c={self.rocker:g}, d={self.frame:g}) "
+                f"is a {self.grashof_class} {self.linkage_type}")
         a, b, c, d = self.crank, self.coupler, self.rocker, self.frame
         out = []
         for kind, ac, flip in (("front", b + a, 0.0), ("back", b - a, math.pi)):
@@ -654,7 +657,7 @@ class FourBar:
         doc["theta_at_gamma_min_deg"] = [math.degrees(t) for t in tr.theta_at_min]
         doc["gamma_max_deg"] = math.degrees(tr.gamma_max)
         doc["theta_at_gamma_max_deg"] = [math.degrees(t) for t in tr.theta_at_max]
-        if self.linkage_type == "crank-rocker" and self.crank_rotates_fully:
+        if self.is_full_turn_crank_rocker:
             front, back = self.dead_centres()
             doc["swing_deg"] = math.degrees(abs(back.phi4 - front.phi4))
             doc["dead_centres"] = []

@@ -73,7 +73,7 @@ def plot_fourbar(fourbar, omega: float | None = None, n: int = 721, *, fig=None)
         a.plot(deg, y, lw=1.4)
         a.set_ylabel(label)
         a.grid(alpha=0.3)
-    if fourbar.linkage_type == "crank-rocker" and fourbar.crank_rotates_fully:
+    if fourbar.is_full_turn_crank_rocker:
         for dc, style in zip(fourbar.dead_centres(), ("--", ":")):
             for a in ax[:, 0]:
                 a.axvline(math.degrees(dc.theta), color="k", ls=style, lw=0.8,

@@ -331,8 +331,7 @@ def solve_eq10(swing: float, b_a: float, *, c_a: float | None = None,
         c, d = (x, given) if c_a is None else (given, x)
         try:
             fb = FourBar(1.0, b_a, c, d)
-            ok = (fb.linkage_type == "crank-rocker" and fb.crank_rotates_fully
-                  and abs(fb.swing() - swing) <= tol)
+            ok = fb.is_full_turn_crank_rocker and abs(fb.swing() - swing) <= tol
         except GeometryError:
             ok = False
         if ok:
