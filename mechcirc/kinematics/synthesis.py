@@ -340,7 +340,11 @@ def solve_eq10(swing: float, b_a: float, *, c_a: float | None = None,
 
 
 # ------------------------------------------------------------ one design
-def _crit(name, value, limit_text, margin):
+def _crit(name, value, limit_text, margin, closed: bool = False):
+    """The criterion ``name``; on a ``closed`` range a value exactly on an end (margin within
+    1e-9 of 0) passes, with margin 0."""
+    if closed and abs(margin) < 1e-9:
+        return Criterion(name, float(value), limit_text, True, 0.0)
     return Criterion(name, float(value), limit_text, bool(margin > 0), float(margin))
 
 
@@ -398,17 +402,12 @@ def _criteria(a, b, c, d, gamma1, gmin, ratio, swing, crank_range, swing_range):
               "acceleration_ratio": f"< {ACCELERATION_RATIO_MAX:g}",
               "frame_length": f"< {FRAME_MAX_MM:g} mm", "rocker_ratio": f"> {bound:.4g}"}
     crit = {"crank_length": _crit("crank_length", a, f"{lo:g}–{hi:g} mm",
-                                  min(a - lo, hi - a) / (hi - lo) if hi > lo else 0.0)}
+                                  min(a - lo, hi - a) / (hi - lo) if hi > lo else 0.0, True)}
     for name, (value, margin) in _shape_margins(gamma1, gmin, ratio, d, c / a, bound).items():
         crit[name] = _crit(name, value, limits[name], margin)
     crit["swing"] = _crit("swing", swing, f"{s_lo:g}–{s_hi:g}°",
                           min(swing - s_lo, s_hi - swing) / (s_hi - s_lo) if s_hi > s_lo
-                          else -abs(swing - s_lo) / s_lo)
-    # crank_length and swing: a value exactly on the closed range is allowed
-    for name in ("crank_length", "swing"):
-        cr = crit[name]
-        if cr.margin == 0.0 or abs(cr.margin) < 1e-9:
-            crit[name] = Criterion(cr.name, cr.value, cr.limit, True, 0.0)
+                          else -abs(swing - s_lo) / s_lo, True)
     return crit
 
 
