@@ -497,6 +497,14 @@ class FourBar:
                    if self.grashof_class == "change-point" else ""))
         return float(s.phi4), float(s.mu), float(s.nu)
 
+    def joints(self, theta: float) -> tuple[tuple[float, float], ...]:
+        """Joints A, B, C, D as (x, y) [length unit] at one crank angle ``theta`` [rad] (A at the
+        origin, D on the x axis; :meth:`transfer` places C)."""
+        phi4 = self.transfer(theta)[0]
+        a, c, d = self.crank, self.rocker, self.frame
+        return ((0.0, 0.0), (a * math.cos(theta), a * math.sin(theta)),
+                (d + c * math.cos(phi4), c * math.sin(phi4)), (d, 0.0))
+
     # ------------------------------------------------------------- summaries
     def dead_centres(self) -> tuple[DeadCentre, DeadCentre]:
         """Front (crank and coupler extended) and back (folded) dead centres.

@@ -111,8 +111,7 @@ def draw_design(design, ax):
     front, back = fb.dead_centres()
     a, c, d = fb.crank, fb.rocker, fb.frame
     for dc, style, colour in ((front, "-", "C0"), (back, "--", "C1")):
-        B = (a * math.cos(dc.theta), a * math.sin(dc.theta))
-        C = (d + c * math.cos(dc.phi4), c * math.sin(dc.phi4))
+        _, B, C, _ = fb.joints(dc.theta)
         ax.plot([0, B[0], C[0], d], [0, B[1], C[1], 0], style, color=colour, lw=2, marker="o",
                 ms=4, label=f"{dc.kind} dead centre (θ = {math.degrees(dc.theta):.1f}°)")
     lo, hi = sorted((front.phi4, back.phi4))

@@ -78,14 +78,6 @@ class SceneOptions:
                                 f"{self.alpha_deg}")
 
 
-def _pose(design):
-    fb = design.fourbar()
-    phi4 = float(fb.rocker_angle(0.0))
-    a, c, d = fb.crank, fb.rocker, fb.frame
-    return {"A": (0.0, 0.0), "B": (a, 0.0),
-            "C": (d + c * math.cos(phi4), c * math.sin(phi4)), "D": (d, 0.0)}
-
-
 def _header(design, k):
     front, back = design.fourbar().dead_centres()
     return (f"# Beat-up four-bar #{k} from mechcirc synth: a = {design.a:.6g}, b = {design.b:.6g}, "
@@ -111,7 +103,8 @@ def linkage_toml(design, k: int = 1, omega: float = 100.0) -> str:
     -------
     str
     """
-    pts = "\n".join(f"{p} = [{x!r}, {y!r}]" for p, (x, y) in _pose(design).items())
+    pts = "\n".join(f"{p} = [{x!r}, {y!r}]"
+                    for p, (x, y) in zip("ABCD", design.fourbar().joints(0.0)))
     return (_header(design, k) +
             f'name = "beat-up four-bar {k}"\nunits = "mm"\n\n[points]\n{pts}\n\n'
             '[ground]\npoints = ["A", "D"]\n\n'
