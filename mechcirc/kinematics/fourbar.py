@@ -657,9 +657,8 @@ class FourBar:
             "frame": self.frame, "branch": self.branch,
             "grashof_class": self.grashof_class, "linkage_type": self.linkage_type,
         }
-        lo, hi = self.crank_range()
         doc["crank_rotates_fully"] = self.crank_rotates_fully
-        doc["crank_range_deg"] = [math.degrees(lo), math.degrees(hi)]
+        doc["crank_range_deg"] = [math.degrees(t) for t in self.crank_range()]
         tr = self.transmission_range()
         doc["gamma_min_deg"] = math.degrees(tr.gamma_min)
         doc["theta_at_gamma_min_deg"] = [math.degrees(t) for t in tr.theta_at_min]
@@ -678,11 +677,10 @@ class FourBar:
                 doc["dead_centres"].append(entry)
         crossings = self.branch_crossings()
         doc["branch_crossings_deg"] = [math.degrees(t) for t in crossings]
-        doc["notes"] = []
+        doc["notes"] = [self._crossings_note(crossings)] if crossings else []
         if omega is not None:
             doc["omega"] = omega
         if crossings:
-            doc["notes"].append(self._crossings_note(crossings))
             doc["nu_min"] = doc["nu_max"] = None
             doc["theta_at_nu_min_deg"] = doc["theta_at_nu_max_deg"] = None
             if omega is not None:
