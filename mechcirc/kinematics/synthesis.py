@@ -471,9 +471,8 @@ def synthesize(load: Literal["light", "medium", "heavy"] = "medium", swing: floa
     """
     fixed, s_range, crank_range = _checked(load, objective, fixed, swing, swing_range, b_a_range,
                                            d_a_range, step, crank_step, swing_step)
-    axes = _grid_axes(fixed, swing, s_range, crank_range, b_a_range, d_a_range, step,
-                      crank_step, swing_step)
     space = _Space(fixed, b_a_range, d_a_range, crank_range, s_range, swing)
+    axes = space.grid_axes(step, crank_step, swing_step)
     grid, cols, valid, passes = _screened_grid(space, fixed, s_range, *axes)
     rejected = {name: int((valid & ~p).sum()) for name, p in passes.items()}
     ok = np.logical_and.reduce([valid, *passes.values()])
@@ -516,33 +515,6 @@ def _known(what: str, value, known) -> None:
     if value not in known:
         raise GeometryError(f"unknown {what} {value!r}; expected one of {', '.join(known)}"
                             f"{did_you_mean(str(value), known)}")
-
-
-def _grid_axes(fixed, swing, s_range, crank_range, b_a_range, d_a_range, step, crank_step,
-               swing_step):
-    """The grid's cranks [mm], swings [deg], b/a and d/a, refused when too large.
-
-    Each axis holds at least its low end (:func:`_checked` has low ≤ high), so the grid
-    is never empty; its size is counted before any array is made, as ``np.arange``
-    counts (ceil((stop − start)/step)).
-    """
-    lo, hi = crank_range
-
-    def size(a, b, h):
-        return math.ceil((b + 1e-9 - a) / h)
-
-    n_grid = size(lo, hi, crank_step) * \
-        (1 if swing is not None else size(s_range[0], s_range[1], swing_step)) * \
-        (1 if "coupler" in fixed else size(*b_a_range, step)) * \
-        (1 if {"rocker", "frame"} & set(fixed) else size(*d_a_range, step))
-    if n_grid > 20_000_000:
-        raise GeometryError(f"synthesis grid of {n_grid:.3g} points is too large (limit 2e7); "
-                            f"use larger steps or narrower ranges")
-    swings = (np.array([float(swing)]) if swing is not None else
-              np.arange(s_range[0], s_range[1] + 1e-9, swing_step))
-    return (np.arange(lo, hi + 1e-9, crank_step), swings,
-            np.arange(b_a_range[0], b_a_range[1] + 1e-9, step),
-            np.arange(d_a_range[0], d_a_range[1] + 1e-9, step))
 
 
 def _screened_grid(space, fixed, s_range, cranks, swings, b_as, d_as):
@@ -657,6 +629,31 @@ class _Space:
         self.crank_range, self.swing_range, self.swing = crank_range, swing_range, swing
         self.solve_d = "rocker" in fixed
         self.limits_in_ratio = bool({"coupler", "frame"} & set(fixed))
+
+    def grid_axes(self, step, crank_step, swing_step):
+        """The grid's cranks [mm], swings [deg], b/a and d/a, refused when too large.
+
+        Each axis holds at least its low end (:func:`_checked` has low ≤ high), so the grid
+        is never empty; its size is counted before any array is made, as ``np.arange``
+        counts (ceil((stop − start)/step)).
+        """
+        lo, hi = self.crank_range
+
+        def size(a, b, h):
+            return math.ceil((b + 1e-9 - a) / h)
+
+        n_grid = size(lo, hi, crank_step) * \
+            (1 if self.swing is not None else size(*self.swing_range, swing_step)) * \
+            (1 if "coupler" in self.fixed else size(*self.b_a_range, step)) * \
+            (1 if {"rocker", "frame"} & set(self.fixed) else size(*self.d_a_range, step))
+        if n_grid > 20_000_000:
+            raise GeometryError(f"synthesis grid of {n_grid:.3g} points is too large (limit 2e7); "
+                                f"use larger steps or narrower ranges")
+        swings = (np.array([float(self.swing)]) if self.swing is not None else
+                  np.arange(self.swing_range[0], self.swing_range[1] + 1e-9, swing_step))
+        return (np.arange(lo, hi + 1e-9, crank_step), swings,
+                np.arange(self.b_a_range[0], self.b_a_range[1] + 1e-9, step),
+                np.arange(self.d_a_range[0], self.d_a_range[1] + 1e-9, step))
 
     def ratios(self, A, BA, OTHER):
         f = self.fixed
