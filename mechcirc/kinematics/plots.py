@@ -302,9 +302,8 @@ def plot_linkage(linkage, state, paths=None, *, ax=None, fig=None):
     else:
         fig, axes = _figure(1, 1, (7, 7), fig, "plot_linkage")
         a = axes[0, 0]
-    if paths:
-        for xy in paths.values():
-            a.plot(xy[:, 0], xy[:, 1], lw=0.8, alpha=0.7)
+    for xy in (paths or {}).values():
+        a.plot(xy[:, 0], xy[:, 1], lw=0.8, alpha=0.7)
     for name, pts in linkage.links.items():
         xy = np.array([state.points[p] for p in pts] + [state.points[pts[0]]])
         if len(pts) > 2:
