@@ -43,7 +43,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import InputError, NetlistError
-from .sources import brief, did_you_mean, real_number, summary_repr
+from .sources import brief, csv_rows, did_you_mean, read_source, real_number, summary_repr
 
 __all__ = [
     "LAWS",
@@ -261,13 +261,10 @@ class Motion:
         acc = np.zeros((start.size, k.size), dtype=complex)
         sign = 1.0
         zpow = z
-        for _ in range(_DEG - 1):
+        for _ in range(_DEG - 1):           # q⁽ʳ⁾ for r = 0 … 4, the last a constant
             qL = np.polynomial.polynomial.polyval(length, q.T, tensor=False)       # q⁽ʳ⁾(L), per piece
-            q0 = q[:, 0]
-            acc += sign * (eL * qL[:, None] - q0[:, None]) / zpow
-            q = q[:, 1:] * np.arange(1, q.shape[1]) if q.shape[1] > 1 else q[:, :0]
-            if q.shape[1] == 0:
-                break
+            acc += sign * (eL * qL[:, None] - q[:, 0, None]) / zpow
+            q = q[:, 1:] * np.arange(1, q.shape[1])
             sign = -sign
             zpow = zpow * z
         # Sinusoid part: B w cos(wτ + φ) = (Bw/2)(e^{j(wτ+φ)} + e^{−j(wτ+φ)}).
@@ -510,8 +507,6 @@ def read_motion_table(path: str | os.PathLike, spec: str | None = None) -> Motio
     NetlistError
         At ``file:row:column`` of the first bad value, with what is expected.
     """
-    from .sources import read_source
-
     source = os.fspath(path)
     text = read_source(path, "a motion table (CSV: angle_deg,displacement)")
     rows, header = _table_rows(text, source)
@@ -528,8 +523,6 @@ def read_motion_table(path: str | os.PathLike, spec: str | None = None) -> Motio
 
 def _header(cells, source: str, lineno: int) -> tuple:
     """(index of angle_deg, index of displacement, the column names) of the header row."""
-    from .sources import brief
-
     names = [c.strip().lower() for c in cells]
     for need in ("angle_deg", "displacement"):
         if need not in names:
@@ -542,8 +535,6 @@ def _header(cells, source: str, lineno: int) -> tuple:
 
 def _table_rows(text: str, source: str):
     """The rows (angle, displacement, line, columns) of a motion table and its header."""
-    from .sources import csv_rows
-
     rows: list[tuple] = []
     header = None
     for lineno, cells, cols, pos in csv_rows(text, source):

@@ -75,10 +75,9 @@ class LinkMass:
     inertia: float = 0.0
 
     def __post_init__(self):
-        if not (math.isfinite(self.mass) and self.mass >= 0):
-            raise GeometryError(f"link mass must be finite and ≥ 0 kg, got {self.mass}")
-        if not (math.isfinite(self.inertia) and self.inertia >= 0):
-            raise GeometryError(f"link inertia must be finite and ≥ 0 kg·m², got {self.inertia}")
+        for what, value, unit in (("mass", self.mass, "kg"), ("inertia", self.inertia, "kg·m²")):
+            if not (math.isfinite(value) and value >= 0):
+                raise GeometryError(f"link {what} must be finite and ≥ 0 {unit}, got {value}")
         com = tuple(float(x) for x in self.com)
         if len(com) != 2 or not all(math.isfinite(x) for x in com):
             raise GeometryError(f"link centre of mass must be two finite numbers [m], got {self.com}")
@@ -314,11 +313,6 @@ def _equilibrium(k, crank, coupler, rocker, F, g):
     M = np.zeros((n, 9, 9))
     rhs = np.zeros((n, 9))
 
-    def moment_row(row, col, r):
-        # r × F for F = (x[col], x[col+1]) -> coefficients (−r_y, r_x)
-        M[:, row, col] += -r[:, 1]
-        M[:, row, col + 1] += r[:, 0]
-
     # per link: rows r, r + 1 its force balance, r + 2 its moments about its centre of
     # mass G; its two joint forces (columns c, c + 1) act on it with the sign given
     for r, link, G, joints in ((0, crank, "G2", ((0, 1, "A"), (2, -1, "B"))),
@@ -327,7 +321,9 @@ def _equilibrium(k, crank, coupler, rocker, F, g):
         for c, sign, P in joints:
             M[:, r, c] = sign
             M[:, r + 1, c + 1] = sign
-            moment_row(r + 2, c, sign * (k[P] - k[G]))
+            arm = sign * (k[P] - k[G])          # arm × F for F = (x[c], x[c+1]): (−arm_y, arm_x)
+            M[:, r + 2, c] += -arm[:, 1]
+            M[:, r + 2, c + 1] += arm[:, 0]
         rhs[:, r:r + 2] = link.mass * (k["a" + G] - g)
         rhs[:, r + 2] = link.inertia * k["al" + G[1]]
     M[:, 2, 8] = 1                      # the driving torque on the crank

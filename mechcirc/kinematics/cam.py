@@ -302,10 +302,10 @@ def cam_profile(motion, base_radius: float, follower: str = "roller", *,
 def _inputs(motion, follower, base_radius, roller_radius, offset, arm, pivot, points,
             pressure_limit_deg):
     """The checked (r_b, r_f, e, L, D, pressure limit [rad]) of :func:`cam_profile`."""
-    if follower not in FOLLOWERS + ("oscillating_flat",):
-        raise InputError(f"unknown follower {follower!r}; expected one of "
-                         f"{', '.join(FOLLOWERS)}, oscillating_flat"
-                         f"{did_you_mean(str(follower), FOLLOWERS + ('oscillating_flat',))}")
+    known = FOLLOWERS + ("oscillating_flat",)
+    if follower not in known:
+        raise InputError(f"unknown follower {follower!r}; expected one of {', '.join(known)}"
+                         f"{did_you_mean(str(follower), known)}")
     if getattr(motion, "period", None) != 2 * math.pi:
         raise InputError("the motion must be a Motion over one turn of the cam (period 2π; "
                          "build it with cam_cycle, motion_table or read_motion_table)")

@@ -323,6 +323,12 @@ class FourBar:
         a, b, c, d = self.crank, self.coupler, self.rocker, self.frame
         return abs(d - a) >= abs(b - c) and d + a <= b + c
 
+    @property
+    def is_full_turn_crank_rocker(self) -> bool:
+        """True for a crank-rocker whose crank turns fully: the linkage of the dead centres and
+        the swing (:meth:`dead_centres`), the beat-up drive and the synthesis."""
+        return self.linkage_type == "crank-rocker" and self.crank_rotates_fully
+
     def crank_range(self) -> tuple[float, float]:
         """Reachable crank angles as ``(theta_lo, theta_hi)`` [rad].
 
@@ -491,14 +497,15 @@ class FourBar:
                    if self.grashof_class == "change-point" else ""))
         return float(s.phi4), float(s.mu), float(s.nu)
 
-    # ------------------------------------------------------------- summaries
-    def _require_crank_rocker(self, what: str):
-        if self.linkage_type != "crank-rocker" or not self.crank_rotates_fully:
-            raise GeometryError(
-                f"{what} is defined for a crank-rocker only; this four-bar "
-                f"(a={self.crank:g}, b={self.coupler:g}, c={self.rocker:g}, d={self.frame:g}) "
-                f"is a {self.grashof_class} {self.linkage_type}")
+    def joints(self, theta: float) -> tuple[tuple[float, float], ...]:
+        """Joints A, B, C, D as (x, y) [length unit] at one crank angle ``theta`` [rad] (A at the
+        origin, D on the x axis; :meth:`transfer` places C)."""
+        phi4 = self.transfer(theta)[0]
+        a, c, d = self.crank, self.rocker, self.frame
+        return ((0.0, 0.0), (a * math.cos(theta), a * math.sin(theta)),
+                (d + c * math.cos(phi4), c * math.sin(phi4)), (d, 0.0))
 
+    # ------------------------------------------------------------- summaries
     def dead_centres(self) -> tuple[DeadCentre, DeadCentre]:
         """Front (crank and coupler extended) and back (folded) dead centres.
 
@@ -513,7 +520,11 @@ class FourBar:
         GeometryError
             The linkage is not a crank-rocker.
         """
-        self._require_crank_rocker("a dead centre")
+        if not self.is_full_turn_crank_rocker:
+            raise GeometryError(
+                f"a dead centre is defined for a crank-rocker only; this four-bar "
+                f"(a={self.crank:g}, b={self.coupler:g}, c={self.rocker:g}, d={self.frame:g}) "
+                f"is a {self.grashof_class} {self.linkage_type}")
         a, b, c, d = self.crank, self.coupler, self.rocker, self.frame
         out = []
         for kind, ac, flip in (("front", b + a, 0.0), ("back", b - a, math.pi)):
@@ -646,15 +657,14 @@ class FourBar:
             "frame": self.frame, "branch": self.branch,
             "grashof_class": self.grashof_class, "linkage_type": self.linkage_type,
         }
-        lo, hi = self.crank_range()
         doc["crank_rotates_fully"] = self.crank_rotates_fully
-        doc["crank_range_deg"] = [math.degrees(lo), math.degrees(hi)]
+        doc["crank_range_deg"] = [math.degrees(t) for t in self.crank_range()]
         tr = self.transmission_range()
         doc["gamma_min_deg"] = math.degrees(tr.gamma_min)
         doc["theta_at_gamma_min_deg"] = [math.degrees(t) for t in tr.theta_at_min]
         doc["gamma_max_deg"] = math.degrees(tr.gamma_max)
         doc["theta_at_gamma_max_deg"] = [math.degrees(t) for t in tr.theta_at_max]
-        if self.linkage_type == "crank-rocker" and self.crank_rotates_fully:
+        if self.is_full_turn_crank_rocker:
             front, back = self.dead_centres()
             doc["swing_deg"] = math.degrees(abs(back.phi4 - front.phi4))
             doc["dead_centres"] = []
@@ -667,11 +677,10 @@ class FourBar:
                 doc["dead_centres"].append(entry)
         crossings = self.branch_crossings()
         doc["branch_crossings_deg"] = [math.degrees(t) for t in crossings]
-        doc["notes"] = []
+        doc["notes"] = [self._crossings_note(crossings)] if crossings else []
         if omega is not None:
             doc["omega"] = omega
         if crossings:
-            doc["notes"].append(self._crossings_note(crossings))
             doc["nu_min"] = doc["nu_max"] = None
             doc["theta_at_nu_min_deg"] = doc["theta_at_nu_max_deg"] = None
             if omega is not None:

@@ -73,7 +73,7 @@ def plot_fourbar(fourbar, omega: float | None = None, n: int = 721, *, fig=None)
         a.plot(deg, y, lw=1.4)
         a.set_ylabel(label)
         a.grid(alpha=0.3)
-    if fourbar.linkage_type == "crank-rocker" and fourbar.crank_rotates_fully:
+    if fourbar.is_full_turn_crank_rocker:
         for dc, style in zip(fourbar.dead_centres(), ("--", ":")):
             for a in ax[:, 0]:
                 a.axvline(math.degrees(dc.theta), color="k", ls=style, lw=0.8,
@@ -111,8 +111,7 @@ def draw_design(design, ax):
     front, back = fb.dead_centres()
     a, c, d = fb.crank, fb.rocker, fb.frame
     for dc, style, colour in ((front, "-", "C0"), (back, "--", "C1")):
-        B = (a * math.cos(dc.theta), a * math.sin(dc.theta))
-        C = (d + c * math.cos(dc.phi4), c * math.sin(dc.phi4))
+        _, B, C, _ = fb.joints(dc.theta)
         ax.plot([0, B[0], C[0], d], [0, B[1], C[1], 0], style, color=colour, lw=2, marker="o",
                 ms=4, label=f"{dc.kind} dead centre (θ = {math.degrees(dc.theta):.1f}°)")
     lo, hi = sorted((front.phi4, back.phi4))
@@ -197,22 +196,25 @@ def plot_frame_loading(result, *, fig=None):
         Figure): its three panels stacked.
     """
     fig, ax = _figure(3, 1, (7, 8), fig, "plot_frame_loading")
-    deg = np.degrees(result.theta)
     S = result.shaking_force
-    ax[0, 0].plot(deg, S[:, 0], label="S_x")
-    ax[0, 0].plot(deg, S[:, 1], label="S_y")
-    ax[0, 0].plot(deg, result.shaking_force_magnitude, "k", label="|S|")
-    ax[0, 0].set_ylabel("shaking force [N]")
-    ax[1, 0].plot(deg, result.torque, label="T")
-    ax[1, 0].set_ylabel("crank torque [N·m]")
-    ax[2, 0].plot(deg, result.T_a, label="T_a (about A)")
-    ax[2, 0].plot(deg, result.T_d, label="T_d (about D)")
-    ax[2, 0].set_ylabel("shaking moment [N·m]")
+    _curves(ax[0, 0], result.theta, "shaking force [N]", ("S_x", S[:, 0]), ("S_y", S[:, 1]),
+            ("|S|", result.shaking_force_magnitude, "k"))
+    _curves(ax[1, 0], result.theta, "crank torque [N·m]", ("T", result.torque))
+    _curves(ax[2, 0], result.theta, "shaking moment [N·m]", ("T_a (about A)", result.T_a),
+            ("T_d (about D)", result.T_d))
     ax[2, 0].set_xlabel("crank angle θ [deg]")
-    for a in ax[:, 0]:
-        a.grid(alpha=0.3)
-        a.legend(fontsize="small", loc="best")
     return fig
+
+
+def _curves(a, theta, ylabel: str, *curves):
+    """Curves ``(label, y[, format])`` against the crank angle ``theta`` [rad] (drawn in
+    degrees) on ``a``, with their legend and a grid; ``ylabel`` names the axis."""
+    deg = np.degrees(theta)
+    for label, y, *fmt in curves:
+        a.plot(deg, y, *fmt, label=label)
+    a.set_ylabel(ylabel)
+    a.grid(alpha=0.3)
+    a.legend(fontsize="small", loc="best")
 
 
 def plot_shaking(result, fig=None):
@@ -256,21 +258,15 @@ def plot_shaking(result, fig=None):
     a.plot(deg, mag, "k", lw=1.4)
     a.set_ylabel("|S| [N]")
     a.set_title("shaking force magnitude (Fig. 6)")
-    a = ax[1, 0]
-    a.plot(deg, np.hypot(*result.F_A.T), label="|F_A| (crankshaft bearing)")
-    a.plot(deg, np.hypot(*result.F_D.T), label="|F_D| (rocking-shaft bearing)")
-    a.set_ylabel("bearing force [N]")
-    a = ax[1, 1]
-    a.plot(deg, result.torque, label="T (driving torque)")
-    a.plot(deg, result.T_a, label="T_a (about A)")
-    a.plot(deg, result.T_d, label="T_d (about D)")
-    a.set_ylabel("moment [N·m]")
+    _curves(ax[1, 0], result.theta, "bearing force [N]",
+            ("|F_A| (crankshaft bearing)", np.hypot(*result.F_A.T)),
+            ("|F_D| (rocking-shaft bearing)", np.hypot(*result.F_D.T)))
+    _curves(ax[1, 1], result.theta, "moment [N·m]", ("T (driving torque)", result.torque),
+            ("T_a (about A)", result.T_a), ("T_d (about D)", result.T_d))
     for a in (ax[0, 1], ax[1, 0], ax[1, 1]):
         a.set_xlabel("crank angle θ [deg]")
+    for a in (ax[0, 0], ax[0, 1]):
         a.grid(alpha=0.3)
-    ax[0, 0].grid(alpha=0.3)
-    for a in (ax[1, 0], ax[1, 1]):
-        a.legend(fontsize="small", loc="best")
     fig.suptitle(f"frame loading at ω = {result.omega:.4g} rad/s "
                  f"({convert_frequency(result.omega, 'rad/s', 'rpm'):.4g} rpm)")
     return fig
@@ -306,9 +302,8 @@ def plot_linkage(linkage, state, paths=None, *, ax=None, fig=None):
     else:
         fig, axes = _figure(1, 1, (7, 7), fig, "plot_linkage")
         a = axes[0, 0]
-    if paths:
-        for xy in paths.values():
-            a.plot(xy[:, 0], xy[:, 1], lw=0.8, alpha=0.7)
+    for xy in (paths or {}).values():
+        a.plot(xy[:, 0], xy[:, 1], lw=0.8, alpha=0.7)
     for name, pts in linkage.links.items():
         xy = np.array([state.points[p] for p in pts] + [state.points[pts[0]]])
         if len(pts) > 2:

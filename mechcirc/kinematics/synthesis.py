@@ -331,8 +331,7 @@ def solve_eq10(swing: float, b_a: float, *, c_a: float | None = None,
         c, d = (x, given) if c_a is None else (given, x)
         try:
             fb = FourBar(1.0, b_a, c, d)
-            ok = (fb.linkage_type == "crank-rocker" and fb.crank_rotates_fully
-                  and abs(fb.swing() - swing) <= tol)
+            ok = fb.is_full_turn_crank_rocker and abs(fb.swing() - swing) <= tol
         except GeometryError:
             ok = False
         if ok:
@@ -341,7 +340,11 @@ def solve_eq10(swing: float, b_a: float, *, c_a: float | None = None,
 
 
 # ------------------------------------------------------------ one design
-def _crit(name, value, limit_text, margin):
+def _crit(name, value, limit_text, margin, closed: bool = False):
+    """The criterion ``name``; on a ``closed`` range a value exactly on an end (margin within
+    1e-9 of 0) passes, with margin 0."""
+    if closed and abs(margin) < 1e-9:
+        return Criterion(name, float(value), limit_text, True, 0.0)
     return Criterion(name, float(value), limit_text, bool(margin > 0), float(margin))
 
 
@@ -399,17 +402,12 @@ def _criteria(a, b, c, d, gamma1, gmin, ratio, swing, crank_range, swing_range):
               "acceleration_ratio": f"< {ACCELERATION_RATIO_MAX:g}",
               "frame_length": f"< {FRAME_MAX_MM:g} mm", "rocker_ratio": f"> {bound:.4g}"}
     crit = {"crank_length": _crit("crank_length", a, f"{lo:g}–{hi:g} mm",
-                                  min(a - lo, hi - a) / (hi - lo) if hi > lo else 0.0)}
+                                  min(a - lo, hi - a) / (hi - lo) if hi > lo else 0.0, True)}
     for name, (value, margin) in _shape_margins(gamma1, gmin, ratio, d, c / a, bound).items():
         crit[name] = _crit(name, value, limits[name], margin)
     crit["swing"] = _crit("swing", swing, f"{s_lo:g}–{s_hi:g}°",
                           min(swing - s_lo, s_hi - swing) / (s_hi - s_lo) if s_hi > s_lo
-                          else -abs(swing - s_lo) / s_lo)
-    # crank_length and swing: a value exactly on the closed range is allowed
-    for name in ("crank_length", "swing"):
-        cr = crit[name]
-        if cr.margin == 0.0 or abs(cr.margin) < 1e-9:
-            crit[name] = Criterion(cr.name, cr.value, cr.limit, True, 0.0)
+                          else -abs(swing - s_lo) / s_lo, True)
     return crit
 
 
@@ -473,9 +471,8 @@ def synthesize(load: Literal["light", "medium", "heavy"] = "medium", swing: floa
     """
     fixed, s_range, crank_range = _checked(load, objective, fixed, swing, swing_range, b_a_range,
                                            d_a_range, step, crank_step, swing_step)
-    axes = _grid_axes(fixed, swing, s_range, crank_range, b_a_range, d_a_range, step,
-                      crank_step, swing_step)
     space = _Space(fixed, b_a_range, d_a_range, crank_range, s_range, swing)
+    axes = space.grid_axes(step, crank_step, swing_step)
     grid, cols, valid, passes = _screened_grid(space, fixed, s_range, *axes)
     rejected = {name: int((valid & ~p).sum()) for name, p in passes.items()}
     ok = np.logical_and.reduce([valid, *passes.values()])
@@ -518,33 +515,6 @@ def _known(what: str, value, known) -> None:
     if value not in known:
         raise GeometryError(f"unknown {what} {value!r}; expected one of {', '.join(known)}"
                             f"{did_you_mean(str(value), known)}")
-
-
-def _grid_axes(fixed, swing, s_range, crank_range, b_a_range, d_a_range, step, crank_step,
-               swing_step):
-    """The grid's cranks [mm], swings [deg], b/a and d/a, refused when too large.
-
-    Each axis holds at least its low end (:func:`_checked` has low ≤ high), so the grid
-    is never empty; its size is counted before any array is made, as ``np.arange``
-    counts (ceil((stop − start)/step)).
-    """
-    lo, hi = crank_range
-
-    def size(a, b, h):
-        return math.ceil((b + 1e-9 - a) / h)
-
-    n_grid = size(lo, hi, crank_step) * \
-        (1 if swing is not None else size(s_range[0], s_range[1], swing_step)) * \
-        (1 if "coupler" in fixed else size(*b_a_range, step)) * \
-        (1 if {"rocker", "frame"} & set(fixed) else size(*d_a_range, step))
-    if n_grid > 20_000_000:
-        raise GeometryError(f"synthesis grid of {n_grid:.3g} points is too large (limit 2e7); "
-                            f"use larger steps or narrower ranges")
-    swings = (np.array([float(swing)]) if swing is not None else
-              np.arange(s_range[0], s_range[1] + 1e-9, swing_step))
-    return (np.arange(lo, hi + 1e-9, crank_step), swings,
-            np.arange(b_a_range[0], b_a_range[1] + 1e-9, step),
-            np.arange(d_a_range[0], d_a_range[1] + 1e-9, step))
 
 
 def _screened_grid(space, fixed, s_range, cranks, swings, b_as, d_as):
@@ -659,6 +629,31 @@ class _Space:
         self.crank_range, self.swing_range, self.swing = crank_range, swing_range, swing
         self.solve_d = "rocker" in fixed
         self.limits_in_ratio = bool({"coupler", "frame"} & set(fixed))
+
+    def grid_axes(self, step, crank_step, swing_step):
+        """The grid's cranks [mm], swings [deg], b/a and d/a, refused when too large.
+
+        Each axis holds at least its low end (:func:`_checked` has low ≤ high), so the grid
+        is never empty; its size is counted before any array is made, as ``np.arange``
+        counts (ceil((stop − start)/step)).
+        """
+        lo, hi = self.crank_range
+
+        def size(a, b, h):
+            return math.ceil((b + 1e-9 - a) / h)
+
+        n_grid = size(lo, hi, crank_step) * \
+            (1 if self.swing is not None else size(*self.swing_range, swing_step)) * \
+            (1 if "coupler" in self.fixed else size(*self.b_a_range, step)) * \
+            (1 if {"rocker", "frame"} & set(self.fixed) else size(*self.d_a_range, step))
+        if n_grid > 20_000_000:
+            raise GeometryError(f"synthesis grid of {n_grid:.3g} points is too large (limit 2e7); "
+                                f"use larger steps or narrower ranges")
+        swings = (np.array([float(self.swing)]) if self.swing is not None else
+                  np.arange(self.swing_range[0], self.swing_range[1] + 1e-9, swing_step))
+        return (np.arange(lo, hi + 1e-9, crank_step), swings,
+                np.arange(self.b_a_range[0], self.b_a_range[1] + 1e-9, step),
+                np.arange(self.d_a_range[0], self.d_a_range[1] + 1e-9, step))
 
     def ratios(self, A, BA, OTHER):
         f = self.fixed

@@ -78,14 +78,6 @@ class SceneOptions:
                                 f"{self.alpha_deg}")
 
 
-def _pose(design):
-    fb = design.fourbar()
-    phi4 = float(fb.rocker_angle(0.0))
-    a, c, d = fb.crank, fb.rocker, fb.frame
-    return {"A": (0.0, 0.0), "B": (a, 0.0),
-            "C": (d + c * math.cos(phi4), c * math.sin(phi4)), "D": (d, 0.0)}
-
-
 def _header(design, k):
     front, back = design.fourbar().dead_centres()
     return (f"# Beat-up four-bar #{k} from mechcirc synth: a = {design.a:.6g}, b = {design.b:.6g}, "
@@ -111,7 +103,8 @@ def linkage_toml(design, k: int = 1, omega: float = 100.0) -> str:
     -------
     str
     """
-    pts = "\n".join(f"{p} = [{x!r}, {y!r}]" for p, (x, y) in _pose(design).items())
+    pts = "\n".join(f"{p} = [{x!r}, {y!r}]"
+                    for p, (x, y) in zip("ABCD", design.fourbar().joints(0.0)))
     return (_header(design, k) +
             f'name = "beat-up four-bar {k}"\nunits = "mm"\n\n[points]\n{pts}\n\n'
             '[ground]\npoints = ["A", "D"]\n\n'
@@ -135,43 +128,23 @@ def scene_toml(design, k: int = 1, opts: SceneOptions = SceneOptions()) -> str:
     """
     o = opts
     front, _ = design.fourbar().dead_centres()
-    return (linkage_toml(design, k, o.omega) + f'''
-[[torsion]]            # drive shaft -> crank
-name = "C2"
-link = "crank"
-body = "shaft"
-stiffness = {o.C2!r}
-damping = {o.k2!r}
+    masses = (("I2P", "crank", o.I2P), ("I4", "rocker", o.I4), ("I4P", "sley", o.I4P))
+    tables = [_table("[[torsion]]            # drive shaft -> crank", name="C2", link="crank",
+                     body="shaft", stiffness=o.C2, damping=o.k2),
+              _table("[[torsion]]            # rocker -> sley", name="C4", link="rocker",
+                     body="sley", stiffness=o.C4, damping=o.k4),
+              *(_table("[[masses]]", name=name, link=link, inertia=v) for name, link, v in masses),
+              _table("[drive]", link="shaft", velocity=o.omega),
+              f"[analysis]\ntheta_deg = {round((math.degrees(front.theta) + 90.0) % 360.0, 6)!r}"
+              "   # 90° after beat-up\n"]
+    return linkage_toml(design, k, o.omega) + "\n" + "\n".join(tables) + _beat_up(o, front)
 
-[[torsion]]            # rocker -> sley
-name = "C4"
-link = "rocker"
-body = "sley"
-stiffness = {o.C4!r}
-damping = {o.k4!r}
 
-[[masses]]
-name = "I2P"
-link = "crank"
-inertia = {o.I2P!r}
-
-[[masses]]
-name = "I4"
-link = "rocker"
-inertia = {o.I4!r}
-
-[[masses]]
-name = "I4P"
-link = "sley"
-inertia = {o.I4P!r}
-
-[drive]
-link = "shaft"
-velocity = {o.omega!r}
-
-[analysis]
-theta_deg = {round((math.degrees(front.theta) + 90.0) % 360.0, 6)!r}   # 90° after beat-up
-''' + _beat_up(o, front))
+def _table(header: str, **keys) -> str:
+    """The TOML table ``header`` with a line ``key = value`` per keyword, in order (a string
+    quoted, a number as its ``repr``)."""
+    return header + "".join(f'\n{key} = "{v}"' if isinstance(v, str) else f"\n{key} = {v!r}"
+                            for key, v in keys.items()) + "\n"
 
 
 def export_designs(designs, directory, opts: SceneOptions = SceneOptions()) -> list:

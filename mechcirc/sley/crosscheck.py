@@ -255,13 +255,12 @@ class HarmonicCheck:
     how: str
 
 
-def forced_amplitude(lin, omega: float, cycles_settle: int | None = None,
-                     cycles_measure: int = 4) -> float:
+def forced_amplitude(lin, omega: float, cycles_measure: int = 4) -> float:
     """Shaft-moment amplitude of the linear model under φ̇2 = cos(ω t), integrated in time.
 
     The moment is Σ_rods C (φ2 − φ_i) + k (φ̇2 − φ̇_i) over the rods the shaft
     drives; its amplitude is fitted (:func:`mechcirc.identify.fit_sinusoid`) over
-    whole periods after the transient has decayed.
+    ``cycles_measure`` whole periods after the transient has decayed below e⁻¹² of its start.
     """
     from scipy.integrate import solve_ivp
 
@@ -270,8 +269,7 @@ def forced_amplitude(lin, omega: float, cycles_settle: int | None = None,
     lam = np.linalg.eigvals(lin.state_matrix())         # of ż = A z [1/s]
     slow = min(abs(lm.real) for lm in lam[lam.imag > 0])   # one per oscillating mode
     period = 2 * math.pi / omega
-    if cycles_settle is None:           # transient below e^-12 of its start
-        cycles_settle = int(math.ceil(12.0 / max(slow, 1e-9) / period))
+    cycles_settle = int(math.ceil(12.0 / max(slow, 1e-9) / period))   # transient below e^-12
 
     def f(t, z):
         x, v = z[:n], z[n:]

@@ -181,7 +181,7 @@ class SleyParameters:
         if self.beat_sign not in (1, -1):
             raise ParameterError(f"beat_sign must be +1 or -1, got {self.beat_sign!r}")
         fb = self.fourbar()          # raises GeometryError when it cannot be assembled
-        if fb.linkage_type != "crank-rocker" or not fb.crank_rotates_fully:
+        if not fb.is_full_turn_crank_rocker:
             raise GeometryError(
                 f"the beat-up drive needs a crank-rocker whose crank turns fully; lengths "
                 f"l2P={self.l2P:g}, l3={self.l3:g}, l4={self.l4:g}, d={self.d:g} m give a "

@@ -86,8 +86,7 @@ def _sley_linkage(p: SleyParameters, name: str, source: str):
 
     from ..kinematics.linkage import Crank, Linkage
 
-    phi4 = p.fourbar().transfer(0.0)[0]
-    C = (p.d + p.l4 * math.cos(phi4), p.l4 * math.sin(phi4))
+    C = p.fourbar().joints(0.0)[2]
     sides = [("", "A", "B", "C", "D", "rocker")] + ([("5", "E", "F", "G", "H", "rocker7")]
                                                     if p.drive == "both-sides" else [])
     pose: dict = {}
