@@ -123,20 +123,22 @@ class Builder:
                             np.max(np.abs(f2))) < 1e-13:
             return self.line(part, 0.0, w)          # turns exactly with the crank
         self.tabs.append(hermite_table(h, f, f1, f2))
-        self.FI.append((0 if periodic else 1, part, len(self.tabs) - 1))
-        self.FF.append((0.0, 0.0, (period or self.period) if periodic else 0.0, lo, h, w))
-        return len(self.FI) - 1
+        return self.add((0 if periodic else 1, part, len(self.tabs) - 1),
+                        (0.0, 0.0, (period or self.period) if periodic else 0.0, lo, h, w))
 
     def line(self, part, a, b):
         """A function a + b q of part's coordinate q."""
-        self.FI.append((2, part, 0))
-        self.FF.append((a, b, 0.0, 0.0, 1.0, 0.0))
-        return len(self.FI) - 1
+        return self.add((2, part, 0), (a, b, 0.0, 0.0, 1.0, 0.0))
 
     def circle(self, part, a, b, c):
         """A circle's coordinate a + b cos(q + c) of part's angle q."""
-        self.FI.append((3, part, 0))
-        self.FF.append((a, b, c, 0.0, 1.0, 0.0))
+        return self.add((3, part, 0), (a, b, c, 0.0, 1.0, 0.0))
+
+    def add(self, fi, ff):
+        """A function of its FI row ``fi`` (kind, part, table) and FF row ``ff`` (a, b, c, lo,
+        h, w); its index."""
+        self.FI.append(fi)
+        self.FF.append(ff)
         return len(self.FI) - 1
 
 
@@ -417,24 +419,23 @@ def _linkage_part(scene, B, h, i, part, tables, tlink):
     else:
         raise GeometryError(f"{scene.source}: the rigid part {{{', '.join(part)}}} cannot "
                             f"be tabulated against the rotation of {cb!r}")
-    sh = (grid[-1] - grid[0]) / B.n
+    g0, sh = float(grid[0]), (grid[-1] - grid[0]) / B.n
 
-    def make(kind, name, i=i, cb=cb, st=sub_states, g0=float(grid[0]), sh=sh, sidx=sidx,
-             turns=turns):
+    def make(kind, name):
         per = TWO_PI if turns else None
         if kind == "angle":
             name = tlink.get(name, name)
             if name == cb:
                 return B.line(i, 0.0, 1.0)
             j = sidx[name]
-            a = np.unwrap([s.q[3 * j + 2] for s in st])
-            return B.table(i, g0, sh, a, [s.qdot[3 * j + 2] for s in st],
-                           [s.qddot[3 * j + 2] for s in st], turns,
+            a = np.unwrap([s.q[3 * j + 2] for s in sub_states])
+            return B.table(i, g0, sh, a, [s.qdot[3 * j + 2] for s in sub_states],
+                           [s.qddot[3 * j + 2] for s in sub_states], turns,
                            _winding(a) if turns else 0.0, per)
         k = "xy".index(kind)
-        return B.table(i, g0, sh, [s.points[name][k] * L for s in st],
-                       [s.velocities[name][k] * L for s in st],
-                       [s.accelerations[name][k] * L for s in st], turns, 0.0, per)
+        return B.table(i, g0, sh, [s.points[name][k] * L for s in sub_states],
+                       [s.velocities[name][k] * L for s in sub_states],
+                       [s.accelerations[name][k] * L for s in sub_states], turns, 0.0, per)
     return cb, rig, make
 
 

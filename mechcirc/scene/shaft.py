@@ -211,9 +211,7 @@ def rigid_model(scene: Scene, N: int = 1024):
         w = round((f[-1] - f[0]) / (2 * math.pi)) * 2 * math.pi / cyc if turns else 0.0
         q = h * np.arange(f.size)
         B.tabs.append(hermite_table(h, f - w * q, f1 - w, f2))
-        B.FI.append([0, 0, len(B.tabs) - 1])
-        B.FF.append([0.0, 0.0, cyc, 0.0, h, w])
-        return len(B.FI) - 1
+        return B.add([0, 0, len(B.tabs) - 1], [0.0, 0.0, cyc, 0.0, h, w])
     MI, MW = [], []
     for m in scene.masses:
         if m.kind == "mass":
