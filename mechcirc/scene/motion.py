@@ -461,8 +461,7 @@ def _elements(scene, prig, point_fns, angle_fn, part_of):
         for side, p in ((0, a), (1, b)):
             pf = point_fns(p)
             if pf is None:
-                x = lk.pose[p] * L
-                fl[4 + 2 * side], fl[5 + 2 * side] = float(x[0]), float(x[1])
+                fl[4 + 2 * side:6 + 2 * side] = (lk.pose[p] * L).tolist()
             else:
                 row[2 + 2 * side], row[3 + 2 * side], row[6 + side] = pf
         fl[3] = float(np.hypot(*(lk.pose[b] - lk.pose[a]))) * L
@@ -474,12 +473,10 @@ def _elements(scene, prig, point_fns, angle_fn, part_of):
         fx, fy, i = point_fns(ld.point)
         fl = [ld.stiffness, ld.damping, 0, 0, 0, 0, 0, 0, 0, 0]
         if ld.anchor is not None:           # a spring to a frame point x: EF[4:6]
-            x = lk.pose[ld.anchor] * L
-            fl[4], fl[5] = float(x[0]), float(x[1])
+            fl[4:6] = (lk.pose[ld.anchor] * L).tolist()
         else:                               # along a fixed unit direction u: EF[8:10]
             u = np.array(ld.direction, float)
-            u = u / np.hypot(*u)
-            fl[8], fl[9] = float(u[0]), float(u[1])
+            fl[8:10] = (u / np.hypot(*u)).tolist()
         add([2 if ld.anchor is None else 3, 0, prig[i], -1, fx, fy, i, i], fl, ld.name)
     if getattr(lk, "contact", ""):        # a cam contact that can open (scene/cam.py)
         from .cam import open_contact_rows
@@ -491,14 +488,12 @@ def _elements(scene, prig, point_fns, angle_fn, part_of):
 def _moments(scene, B, part_of, angle_fn, crank0, cam):
     """The crank-angle moments' kernel rows: MOI = [window fn, body fn],
     MOF = [amplitude, alpha, sigma, centre], names, and each one's centre [rad]."""
-    MOI, MOF, centres = [], [], {}
-    for m in scene.moments:
-        centres[m.name] = moment_centre(scene, m)
-        # the window is in shaft angle: with a cam the crank (its follower) swings, so θ
-        # is the drive part's coordinate itself
-        MOI.append([B.line(part_of[crank0], 0.0, 1.0) if cam else angle_fn(crank0),
-                    angle_fn(m.body)])
-        MOF.append([m.amplitude, m.window, m.sigma, centres[m.name]])
+    centres = {m.name: moment_centre(scene, m) for m in scene.moments}
+    # the window is in shaft angle: with a cam the crank (its follower) swings, so θ is the
+    # drive part's coordinate itself
+    MOI = [[B.line(part_of[crank0], 0.0, 1.0) if cam else angle_fn(crank0), angle_fn(m.body)]
+           for m in scene.moments]
+    MOF = [[m.amplitude, m.window, m.sigma, centres[m.name]] for m in scene.moments]
     return MOI, MOF, [m.name for m in scene.moments], centres
 
 
