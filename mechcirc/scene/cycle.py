@@ -108,8 +108,7 @@ class CycleMap:
                     if not (np.isfinite(a) and np.isfinite(b)) or a * b > 0 or a == b or b == 0:
                         continue
                     t0 = self.theta[i]
-                    step = (self.theta[j] - t0) % self.cycle
-                    th = t0 + step * a / (a - b)
+                    th = t0 + (self.theta[j] - t0) % self.cycle * a / (a - b)
                     out.append({"mode": k, "harmonic": int(h),
                                 "theta_deg": math.degrees(th % self.cycle), "omega": float(target)})
         return sorted(out, key=lambda c: (c["theta_deg"], c["harmonic"]))
