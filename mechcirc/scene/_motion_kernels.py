@@ -333,10 +333,7 @@ def body_outputs(nf, ne, FI, BI, aux, work):
     for k in range(nb):
         f = BI[k]
         p = FI[f, 1]
-        if f < nf:
-            aux[k] = work[7, f] * work[2, p] + work[8, f] * work[1, p] * work[1, p]
-        else:
-            aux[k] = 0.0
+        aux[k] = work[7, f] * work[2, p] + work[8, f] * work[1, p] * work[1, p] if f < nf else 0.0
 
 
 @_leaf
