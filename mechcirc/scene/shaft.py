@@ -521,9 +521,8 @@ class _Run:
         θ), each the end of a step of the method: the cycle rerun at the smallest multiple
         of ``points`` steps not below the run's."""
         k = max(-(-self.eq.steps // points), 1)
-        r = self.eq.run(self.y[:, 0], self.in_theta, self.t[0], cycle / (points * k),
-                        points * k, -math.inf, every=k)
-        return r.y
+        return self.eq.run(self.y[:, 0], self.in_theta, self.t[0], cycle / (points * k),
+                           points * k, -math.inf, every=k).y
 
 
 def _over_cycle(eq, th0, cycle, x0, rtol, scale, dense=False, floor=1e-6):
