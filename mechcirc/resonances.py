@@ -280,15 +280,21 @@ def check_omega_max(omega_max) -> None:
 
 def _solved(M, D, Ks, G_released, G_held, damped: bool, omega_max, vectors: bool) -> tuple:
     """``(held, its vectors, released, its vectors, keep held, keep released)``: both
-    eigenproblems (:func:`_modes`) and which roots survive :func:`_cancel`."""
-    released, v_released = _modes(M, D, Ks, G_released, damped, omega_max, vectors)
-    # Held = released + the drive's row: with every released vector at hand (no lever,
-    # no massless or rigid direction) the held roots and vectors follow from them.
-    if vectors and G_released.size == 0 and v_released is not None and not damped and \
-            v_released.shape[1] == M.shape[0] and \
-            (found := _secular_held(v_released, released, G_held[-1])) is not None:
-        return found[0], found[1], released, v_released, *found[2]
-    held, v_held = _modes(M, D, Ks, G_held, damped, omega_max, vectors)
+    eigenproblems (:func:`_modes`; LAPACK's failures reported as :class:`SolverError`) and
+    which roots survive :func:`_cancel`."""
+    try:
+        released, v_released = _modes(M, D, Ks, G_released, damped, omega_max, vectors)
+        # Held = released + the drive's row: with every released vector at hand (no lever,
+        # no massless or rigid direction) the held roots and vectors follow from them.
+        if vectors and G_released.size == 0 and v_released is not None and not damped and \
+                v_released.shape[1] == M.shape[0] and \
+                (found := _secular_held(v_released, released, G_held[-1])) is not None:
+            return found[0], found[1], released, v_released, *found[2]
+        held, v_held = _modes(M, D, Ks, G_held, damped, omega_max, vectors)
+    except np.linalg.LinAlgError as exc:
+        # Seen only for values spanning most of float64's range (1e-320 … 1e220).
+        raise SolverError(f"resonances: the eigenvalue solver failed ({exc}); element "
+                          "values span too many orders of magnitude", status="lapack") from None
     return held, v_held, released, v_released, *_cancel(held, released)
 
 
@@ -433,16 +439,6 @@ def constraint_basis(G: np.ndarray, n: int, dense: bool = False):
 
 
 def _modes(M, D, Ks, G, damped: bool, omega_max=None, vectors: bool = False):
-    """:func:`_modes_unchecked`, with LAPACK's failures reported as :class:`SolverError`."""
-    try:
-        return _modes_unchecked(M, D, Ks, G, damped, omega_max, vectors)
-    except np.linalg.LinAlgError as exc:
-        # Seen only for values spanning most of float64's range (1e-320 … 1e220).
-        raise SolverError(f"resonances: the eigenvalue solver failed ({exc}); element "
-                          "values span too many orders of magnitude", status="lapack") from None
-
-
-def _modes_unchecked(M, D, Ks, G, damped: bool, omega_max=None, vectors: bool = False):
     """Eigenvalues s (Im s ≥ 0, |s| > 0) of the constrained network, with their error estimates.
 
     ``M``, ``D``, ``Ks`` are sparse; returns ``(roots, V)``: ``roots`` of shape
@@ -854,9 +850,8 @@ def _polish(system, roots: list, damped: bool) -> list[Resonance]:
 def settled(s: np.ndarray, err: np.ndarray, damped: bool) -> np.ndarray:
     """Polished roots ``s`` put where they belong: undamped ones on the imaginary axis,
     damped ones real where within their error ``err`` of the real axis."""
-    if not damped:
-        return 1j * np.abs(s.imag)
-    return np.where(np.abs(s.imag) <= err * np.abs(s), s.real + 0j, s)
+    return np.where(np.abs(s.imag) <= err * np.abs(s), s.real + 0j, s) if damped else \
+        1j * np.abs(s.imag)
 
 
 def _g_and_delta(system, s: np.ndarray, pole: np.ndarray):
@@ -961,7 +956,7 @@ def batched_roots(ds, omega_max: float | None = None):
     by step on stacks.
 
     The same stamps (:func:`mechcirc.nodal.stamps`), projections
-    (:func:`constraint_basis`), scaling and filters as :func:`_modes_unchecked`; the
+    (:func:`constraint_basis`), scaling and filters as :func:`_modes`; the
     massless directions, structural, are condensed out once for all designs and
     each pencil reduced by a batched Cholesky factorisation of its mass matrix
     (:func:`_undamped_stack`); all designs are solved by one stacked
@@ -1148,7 +1143,7 @@ def _scaled_stack(M, K):
 
 
 def _stacked_modes(M: np.ndarray, K: np.ndarray, n0: int, omega_max):
-    """Undamped roots ω of stacks of projected pencils (K, M): :func:`_modes_unchecked`'s
+    """Undamped roots ω of stacks of projected pencils (K, M): :func:`_modes`'s
     scaling and filters on stacks, the pencil reduced by a Cholesky factor of M.
 
     Returns ``(ω, error, ok)``: ω and its eigenvalue estimate (eps·λ_max/λ·:func:`_rounding_factor`) of shape
@@ -1178,13 +1173,13 @@ def _stacked_modes(M: np.ndarray, K: np.ndarray, n0: int, omega_max):
 def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
     """Damped roots s of stacks of projected problems (s² M + s D + K) v = 0, polished.
 
-    :func:`_modes_unchecked`'s scaling, filters and estimates on stacks, for mass
+    :func:`_modes`'s scaling, filters and estimates on stacks, for mass
     matrices that are safely definite (the criterion of :func:`_undamped_stack`;
     others are not ``ok``): the companion matrix [[0, I], [−M⁻¹K, −M⁻¹D]] of
     every design, one stacked ``eigvals`` call (where :func:`_damped` runs QZ on
     the pencil), and each root polished by Newton's method on det P(s),
     s ← s − 1/tr(P(s)⁻¹ P'(s)), P(s) = s²M + sD + K, batched.  The error: the
-    last Newton step, at least :func:`_modes_unchecked`'s estimates (eps·1e2·
+    last Newton step, at least :func:`_modes`'s estimates (eps·1e2·
     |s|max/|s|, nearly coalescing roots): P(s) is formed in float64, so Newton
     cannot make a root more accurate than that (find_resonances polishes on K
     in double-double and reports less).  Returns ``(s, error, ok)``, NaN where
@@ -1211,7 +1206,7 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
     sig = np.linalg.eigvals(A)                           # s / w_ref
     mag = np.abs(sig)
     live = (mag > 1e-6) & (sig.imag >= -1e-12 * mag) & ok[:, None]
-    # Coalescing roots (ζ → 1): _modes_unchecked's estimate from the gaps.
+    # Coalescing roots (ζ → 1): _modes's estimate from the gaps.
     with np.errstate(all="ignore"):
         gap = np.abs(sig[:, :, None] - sig[:, None, :])
         gap[:, np.arange(2 * k), np.arange(2 * k)] = np.inf
@@ -1220,7 +1215,7 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
     mag = np.abs(sig)
     with np.errstate(all="ignore"):
         # Newton on det P in float64 cannot beat the rounding of P(s) itself, about
-        # the eigen-solver's own estimate (_modes_unchecked's eps·1e2·|s|max/|s|):
+        # the eigen-solver's own estimate (_modes's eps·1e2·|s|max/|s|):
         # measured 1.5e-13 on a slow overdamped root (tests/test_batch.py).
         top = np.where(live, mag, 0.0).max(axis=1, initial=1.0)[:, None]
         err = np.maximum(np.maximum(step / mag, 1e2 * eps * top / mag), 10 * near)

@@ -37,7 +37,7 @@ import numpy as np
 
 from .._jit import decorators, load
 from .._ode import hermite_point, record_hermite
-from ..transient._kernels import law_branch
+from ..transient._kernels import branch_changes, law_branch
 
 HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
 # the kernels that allocate nothing, called per step or per evaluation: no reference counting
@@ -333,10 +333,7 @@ def body_outputs(nf, ne, FI, BI, aux, work):
     for k in range(nb):
         f = BI[k]
         p = FI[f, 1]
-        if f < nf:
-            aux[k] = work[7, f] * work[2, p] + work[8, f] * work[1, p] * work[1, p]
-        else:
-            aux[k] = 0.0
+        aux[k] = work[7, f] * work[2, p] + work[8, f] * work[1, p] * work[1, p] if f < nf else 0.0
 
 
 @_leaf
@@ -585,18 +582,9 @@ def tableau(method):
             np.ascontiguousarray(DOP853.C[:s]), True)
 
 
-@_jit_inline
-def switched(reg, regn, nsw):
-    """Whether any of the ``nsw`` force-law pieces in ``regn`` differs from ``reg``."""
-    for e in range(nsw):
-        if regn[e] != reg[e]:
-            return True
-    return False
-
-
 @_leaf
 def cut_at_kink(tc, hh, h, y, K, tmp, ynew, sw0, sw1, reg, regn, TA, TB, TC, PV, FI, FF, tabs,
-                MI_, MW, EI, EF, MOI, MOF, PRIG, BI, aux, auxl, work, off, m, zy, zd, first, nsw):
+                MI_, MW, EI, EF, MOI, MOF, PRIG, BI, aux, auxl, work, off, m, zy, zd, first):
     """:func:`rk_run`'s step from ``tc`` of ``hh`` (of the run's ``h``), in which a force law
     changed piece, cut at the kink: located on the step's interpolant (:func:`locate`), then,
     that interpolant being of low order across the kink, again on the cut step's own (smooth
@@ -621,7 +609,7 @@ def cut_at_kink(tc, hh, h, y, K, tmp, ynew, sw0, sw1, reg, regn, TA, TB, TC, PV,
                 MOF, PRIG, BI, aux, work, zy, zd)
         used += s          # s - 1 stages and f at the end (rk_step)
         regions(FI, EI, EF, MOI, MOF, aux, work, off, regn, sw1, first)
-        if not switched(reg, regn, nsw):     # cut before the kink: the next piece finds it
+        if not branch_changes(reg, regn):   # cut before the kink: the next piece finds it
             break
         # only whether the kink is within the break's tolerance of the end: tried first
         more, extra = locate(tc, hh, y, K[0], ynew, K[s], tmp, K[1], sw0, sw1, reg, regn, PV,
@@ -692,11 +680,11 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
             full = True
             if gaps > 0:
                 regions(FI, EI, EF, MOI, MOF, aux, work, off, regn, sw1, first)
-                if switched(reg, regn, nsw) and sub < 7:
+                if branch_changes(reg, regn) and sub < 7:
                     hh, full, used = cut_at_kink(
                         tc, hh, h, y, K, tmp, ynew, sw0, sw1, reg, regn, TA, TB, TC, PV, FI,
                         FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, aux, auxl, work, off, m,
-                        zy, zd, first, nsw)
+                        zy, zd, first)
                     nfev += used
                 for e in range(nsw + ne):       # the pieces, the switches' values, the rates
                     sw0[e] = sw1[e]

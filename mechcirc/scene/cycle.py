@@ -108,8 +108,7 @@ class CycleMap:
                     if not (np.isfinite(a) and np.isfinite(b)) or a * b > 0 or a == b or b == 0:
                         continue
                     t0 = self.theta[i]
-                    step = (self.theta[j] - t0) % self.cycle
-                    th = t0 + step * a / (a - b)
+                    th = t0 + (self.theta[j] - t0) % self.cycle * a / (a - b)
                     out.append({"mode": k, "harmonic": int(h),
                                 "theta_deg": math.degrees(th % self.cycle), "omega": float(target)})
         return sorted(out, key=lambda c: (c["theta_deg"], c["harmonic"]))
@@ -128,16 +127,13 @@ class CycleMap:
 
     def as_dict(self) -> dict:
         """Plain data for JSON output."""
-        def res(row):
-            return [r.as_dict() for r in row]
-
         return {
             "omega_shaft": self.omega_shaft,
             "harmonics": self.harmonics.tolist(),
             "Q0_unit": "N·m" if self.rotational else "N",
             "points": [
-                {"theta_deg": math.degrees(t), "resonances": res(r),
-                 "antiresonances": res(a), "abs_Q0": np.abs(q).tolist(),
+                {"theta_deg": math.degrees(t), "resonances": [x.as_dict() for x in r],
+                 "antiresonances": [x.as_dict() for x in a], "abs_Q0": np.abs(q).tolist(),
                  **({"skipped": self.skipped[i]} if i in self.skipped else {})}
                 for i, (t, r, a, q) in enumerate(zip(self.theta, self.resonances,
                                                      self.antiresonances, self.Q0))],

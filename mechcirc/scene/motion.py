@@ -123,20 +123,22 @@ class Builder:
                             np.max(np.abs(f2))) < 1e-13:
             return self.line(part, 0.0, w)          # turns exactly with the crank
         self.tabs.append(hermite_table(h, f, f1, f2))
-        self.FI.append((0 if periodic else 1, part, len(self.tabs) - 1))
-        self.FF.append((0.0, 0.0, (period or self.period) if periodic else 0.0, lo, h, w))
-        return len(self.FI) - 1
+        return self.add((0 if periodic else 1, part, len(self.tabs) - 1),
+                        (0.0, 0.0, (period or self.period) if periodic else 0.0, lo, h, w))
 
     def line(self, part, a, b):
         """A function a + b q of part's coordinate q."""
-        self.FI.append((2, part, 0))
-        self.FF.append((a, b, 0.0, 0.0, 1.0, 0.0))
-        return len(self.FI) - 1
+        return self.add((2, part, 0), (a, b, 0.0, 0.0, 1.0, 0.0))
 
     def circle(self, part, a, b, c):
         """A circle's coordinate a + b cos(q + c) of part's angle q."""
-        self.FI.append((3, part, 0))
-        self.FF.append((a, b, c, 0.0, 1.0, 0.0))
+        return self.add((3, part, 0), (a, b, c, 0.0, 1.0, 0.0))
+
+    def add(self, fi, ff):
+        """A function of its FI row ``fi`` (kind, part, table) and FF row ``ff`` (a, b, c, lo,
+        h, w); its index."""
+        self.FI.append(fi)
+        self.FF.append(ff)
         return len(self.FI) - 1
 
 
@@ -417,24 +419,23 @@ def _linkage_part(scene, B, h, i, part, tables, tlink):
     else:
         raise GeometryError(f"{scene.source}: the rigid part {{{', '.join(part)}}} cannot "
                             f"be tabulated against the rotation of {cb!r}")
-    sh = (grid[-1] - grid[0]) / B.n
+    g0, sh = float(grid[0]), (grid[-1] - grid[0]) / B.n
 
-    def make(kind, name, i=i, cb=cb, st=sub_states, g0=float(grid[0]), sh=sh, sidx=sidx,
-             turns=turns):
+    def make(kind, name):
         per = TWO_PI if turns else None
         if kind == "angle":
             name = tlink.get(name, name)
             if name == cb:
                 return B.line(i, 0.0, 1.0)
             j = sidx[name]
-            a = np.unwrap([s.q[3 * j + 2] for s in st])
-            return B.table(i, g0, sh, a, [s.qdot[3 * j + 2] for s in st],
-                           [s.qddot[3 * j + 2] for s in st], turns,
+            a = np.unwrap([s.q[3 * j + 2] for s in sub_states])
+            return B.table(i, g0, sh, a, [s.qdot[3 * j + 2] for s in sub_states],
+                           [s.qddot[3 * j + 2] for s in sub_states], turns,
                            _winding(a) if turns else 0.0, per)
         k = "xy".index(kind)
-        return B.table(i, g0, sh, [s.points[name][k] * L for s in st],
-                       [s.velocities[name][k] * L for s in st],
-                       [s.accelerations[name][k] * L for s in st], turns, 0.0, per)
+        return B.table(i, g0, sh, [s.points[name][k] * L for s in sub_states],
+                       [s.velocities[name][k] * L for s in sub_states],
+                       [s.accelerations[name][k] * L for s in sub_states], turns, 0.0, per)
     return cb, rig, make
 
 
@@ -460,8 +461,7 @@ def _elements(scene, prig, point_fns, angle_fn, part_of):
         for side, p in ((0, a), (1, b)):
             pf = point_fns(p)
             if pf is None:
-                x = lk.pose[p] * L
-                fl[4 + 2 * side], fl[5 + 2 * side] = float(x[0]), float(x[1])
+                fl[4 + 2 * side:6 + 2 * side] = (lk.pose[p] * L).tolist()
             else:
                 row[2 + 2 * side], row[3 + 2 * side], row[6 + side] = pf
         fl[3] = float(np.hypot(*(lk.pose[b] - lk.pose[a]))) * L
@@ -473,12 +473,10 @@ def _elements(scene, prig, point_fns, angle_fn, part_of):
         fx, fy, i = point_fns(ld.point)
         fl = [ld.stiffness, ld.damping, 0, 0, 0, 0, 0, 0, 0, 0]
         if ld.anchor is not None:           # a spring to a frame point x: EF[4:6]
-            x = lk.pose[ld.anchor] * L
-            fl[4], fl[5] = float(x[0]), float(x[1])
+            fl[4:6] = (lk.pose[ld.anchor] * L).tolist()
         else:                               # along a fixed unit direction u: EF[8:10]
             u = np.array(ld.direction, float)
-            u = u / np.hypot(*u)
-            fl[8], fl[9] = float(u[0]), float(u[1])
+            fl[8:10] = (u / np.hypot(*u)).tolist()
         add([2 if ld.anchor is None else 3, 0, prig[i], -1, fx, fy, i, i], fl, ld.name)
     if getattr(lk, "contact", ""):        # a cam contact that can open (scene/cam.py)
         from .cam import open_contact_rows
@@ -490,14 +488,12 @@ def _elements(scene, prig, point_fns, angle_fn, part_of):
 def _moments(scene, B, part_of, angle_fn, crank0, cam):
     """The crank-angle moments' kernel rows: MOI = [window fn, body fn],
     MOF = [amplitude, alpha, sigma, centre], names, and each one's centre [rad]."""
-    MOI, MOF, centres = [], [], {}
-    for m in scene.moments:
-        centres[m.name] = moment_centre(scene, m)
-        # the window is in shaft angle: with a cam the crank (its follower) swings, so θ
-        # is the drive part's coordinate itself
-        MOI.append([B.line(part_of[crank0], 0.0, 1.0) if cam else angle_fn(crank0),
-                    angle_fn(m.body)])
-        MOF.append([m.amplitude, m.window, m.sigma, centres[m.name]])
+    centres = {m.name: moment_centre(scene, m) for m in scene.moments}
+    # the window is in shaft angle: with a cam the crank (its follower) swings, so θ is the
+    # drive part's coordinate itself
+    MOI = [[B.line(part_of[crank0], 0.0, 1.0) if cam else angle_fn(crank0), angle_fn(m.body)]
+           for m in scene.moments]
+    MOF = [[m.amplitude, m.window, m.sigma, centres[m.name]] for m in scene.moments]
     return MOI, MOF, [m.name for m in scene.moments], centres
 
 

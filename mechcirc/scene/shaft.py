@@ -211,22 +211,19 @@ def rigid_model(scene: Scene, N: int = 1024):
         w = round((f[-1] - f[0]) / (2 * math.pi)) * 2 * math.pi / cyc if turns else 0.0
         q = h * np.arange(f.size)
         B.tabs.append(hermite_table(h, f - w * q, f1 - w, f2))
-        B.FI.append([0, 0, len(B.tabs) - 1])
-        B.FF.append([0.0, 0.0, cyc, 0.0, h, w])
-        return len(B.FI) - 1
+        return B.add([0, 0, len(B.tabs) - 1], [0.0, 0.0, cyc, 0.0, h, w])
     MI, MW = [], []
     for m in scene.masses:
         if m.kind == "mass":
-            for k in (0, 1):
-                MI.append(table(pos[m.point][:, k], vel[m.point][:, k], acc[m.point][:, k]))
-                MW.append(m.value)
+            MI += [table(pos[m.point][:, k], vel[m.point][:, k], acc[m.point][:, k]) for k in (0, 1)]
         else:
             MI.append(table(ang[m.link], ang1[m.link], ang2[m.link], True))
-            MW.append(m.value)
-    MOI, MOF = [], []
-    for mo in scene.moments:                    # the window's angle: θ itself
-        MOI.append([B.line(0, 0.0, 1.0), table(ang[mo.body], ang1[mo.body], ang2[mo.body], True)])
-        MOF.append([mo.amplitude, mo.window, mo.sigma, float(moment_centre(scene, mo))])
+        MW += [m.value] * (2 if m.kind == "mass" else 1)
+    # the window's angle: θ itself
+    MOI = [[B.line(0, 0.0, 1.0), table(ang[mo.body], ang1[mo.body], ang2[mo.body], True)]
+           for mo in scene.moments]
+    MOF = [[mo.amplitude, mo.window, mo.sigma, float(moment_centre(scene, mo))]
+           for mo in scene.moments]
     # one part (the drive's), no elastic elements
     arrays = kernel_arrays(B, len(B.FI), dict(MI=MI, MW=MW, EI=[], EF=[], MOI=MOI, MOF=MOF,
                                               PRIG=[0], BI=[]))
@@ -507,8 +504,7 @@ class _Run:
 
     def __init__(self, eq, in_theta, ts, yk, status, floor):
         self.eq, self.in_theta, self.floor, self.status = eq, in_theta, floor, status
-        self.t, self._yk = ts, yk
-        self.y = _from_kernel(yk, in_theta, eq.n).T
+        self.t, self.y = ts, _from_kernel(yk, in_theta, eq.n).T
 
     def sol(self, x):
         x = np.asarray(x, float)
@@ -517,8 +513,7 @@ class _Run:
         for c, (xi, i) in enumerate(zip(x.ravel(), idx)):
             h = xi - self.t[i]
             out[:, c] = self.y[:, i] if h == 0.0 else self.eq.run(
-                _from_kernel(self._yk[i], self.in_theta, self.eq.n), self.in_theta, self.t[i], h,
-                1, -math.inf, record=False).y[:, -1]
+                self.y[:, i], self.in_theta, self.t[i], h, 1, -math.inf, record=False).y[:, -1]
         return out.reshape((-1,) + x.shape)
 
     def grid(self, cycle, points):
@@ -526,9 +521,8 @@ class _Run:
         θ), each the end of a step of the method: the cycle rerun at the smallest multiple
         of ``points`` steps not below the run's."""
         k = max(-(-self.eq.steps // points), 1)
-        r = self.eq.run(self.y[:, 0], self.in_theta, self.t[0], cycle / (points * k),
-                        points * k, -math.inf, every=k)
-        return r.y
+        return self.eq.run(self.y[:, 0], self.in_theta, self.t[0], cycle / (points * k),
+                           points * k, -math.inf, every=k).y
 
 
 def _over_cycle(eq, th0, cycle, x0, rtol, scale, dense=False, floor=1e-6):

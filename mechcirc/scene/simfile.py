@@ -462,17 +462,14 @@ def _shaft_motor(text: str, source: str, table: dict, num):
         if kind == "kloss":
             opt = {k: num(k) for k in ("breakdown_slip", "rated_power", "rated_speed")
                    if k in table}
-            motor = kloss_motor(sync_speed=num("sync_speed"),
-                                breakdown_torque=num("breakdown_torque"), **opt)
-        else:
-            for k in ("speeds", "torques"):
-                if not isinstance(table.get(k), list):
-                    raise located(text, source, f"[shaft] a motor table needs {k} = [...]",
-                                  "shaft", k if k in table else "motor",
-                                  expected=f"{k} = [{_KEYS[k]}]")
-            motor = table_motor(table["speeds"], table["torques"])
+            return kloss_motor(sync_speed=num("sync_speed"),
+                               breakdown_torque=num("breakdown_torque"), **opt)
+        for k in ("speeds", "torques"):
+            if not isinstance(table.get(k), list):
+                raise located(text, source, f"[shaft] a motor table needs {k} = [...]", "shaft",
+                              k if k in table else "motor", expected=f"{k} = [{_KEYS[k]}]")
+        return table_motor(table["speeds"], table["torques"])
     except MechcircError as exc:
         if hasattr(exc, "line"):
             raise
         raise located(text, source, f"[shaft] {exc}", "shaft", "motor") from None
-    return motor

@@ -781,9 +781,7 @@ def _finish(ctx, main, other, counts, notes, warn, out=None, other_extrema=None,
     if out is None:
         out = _outputs(model, kern, theta_s, ripple, ts, ys)
     extrema = _extrema(out)
-    if sub is None:
-        check = extrema
-    elif check is None:
+    if check is None:
         check = _extrema(out, sub)
     est = None
     if periodicity is None and prev is not None:
@@ -829,11 +827,9 @@ def _new_crank_order(cycle, omega, theta_s, ripple, ts, stride):
                                      else None)
     k = int(wrap[0]) + 1                # one wrap: the order is a rotation by k
     order = np.concatenate((np.arange(k, n), np.arange(k)))
-    if stride == 1:
-        return np.concatenate((crank[k:], crank[:k])), order, None
     # the positions of the samples k + p (p < n − k) and p − (n − k) that are multiples
-    sub = np.concatenate((np.arange(-(-k // stride) * stride, n, stride) - k,
-                          np.arange(0, k, stride) + (n - k)))
+    sub = None if stride == 1 else np.concatenate((
+        np.arange(-(-k // stride) * stride, n, stride) - k, np.arange(0, k, stride) + (n - k)))
     return np.concatenate((crank[k:], crank[:k])), order, sub
 
 
