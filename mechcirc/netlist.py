@@ -32,15 +32,14 @@ file, line and column, what is wrong and what would be right.
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import gc
 import math
 import os
 import re
 import warnings
-from dataclasses import dataclass, fields
-from typing import Mapping, NoReturn
+from dataclasses import fields
+from typing import Mapping, NamedTuple, NoReturn
 from pathlib import Path
 
 from .circuit import ELEMENT_UNITS, Circuit, Drive, Element, ElementKind, Lever
@@ -150,10 +149,15 @@ if tuple(f.name for f in fields(Expr)) != ("kind", "col", "value", "args"):
 _unit = functools.lru_cache(maxsize=1024)(parse_unit)
 
 
-@dataclass(frozen=True)
-class _Token:
+class _Token(NamedTuple):
     text: str
     col: int  # 1-based column of the token's first character
+
+
+#: A token of a line without braces before its comment: a run of non-space characters
+#: (``\s`` is exactly ``str.isspace``); where a comment starts.
+_WORD = re.compile(r"\S+")
+_COMMENT = re.compile("[#;]")
 
 
 class _Line:
@@ -167,8 +171,12 @@ class _Line:
         raise NetlistError(message, self.source, self.lineno, col, expected)
 
     def _split(self, text: str) -> list[_Token]:
+        comment = _COMMENT.search(text)
+        end = len(text) if comment is None else comment.start()
+        if "{" not in text[:end] and "}" not in text[:end]:     # no braces: split at spaces
+            return [_Token(m.group(), m.start() + 1) for m in _WORD.finditer(text, 0, end)]
         tokens: list[_Token] = []
-        end = len(text)         # where a comment starts, or the line's end
+        end = len(text)         # where a comment starts (not in braces), or the line's end
         start = None
         brace = None
         for i, c in enumerate(text):
@@ -217,6 +225,8 @@ def _glued(tok: _Token) -> tuple[_Token, _Token | None]:
 
 #: SPICE and spreadsheet habits, checked on each line before parsing it.
 _DASHES = "\u2212\u2013\u2014\u2012\u2010"
+#: A line without any of these characters has no dash or decimal-comma slip.
+_SLIPS = re.compile(f"[,{_DASHES}]")
 
 #: What a SPICE deck must change, said at its first error (not one slip a run).
 _SPICE_NOTE = ("mechcirc writes its statements as mass, spring, damper, lever, drive and its "
@@ -231,12 +241,12 @@ def _check_slips(line: "_Line", raw: str) -> None:
     if toks and toks[0].text.startswith("*"):
         line.error("'*' does not start a comment in mechcirc (it does in SPICE)", toks[0].col,
                    "'#' or ';' to start a comment; if this is a SPICE deck, " + _SPICE_NOTE)
-    for i, tok in enumerate(toks):
+    for i, tok in enumerate(toks if "=" in raw else ()):
         if tok.text == "=" or (tok.text.startswith("=") and i > 0) or \
                 (tok.text.endswith("=") and i + 1 < len(toks)):
             line.error("spaces around '=': options are written without spaces", tok.col,
                        "NAME=VALUE with no spaces, e.g. velocity=0.1 or eta=0.5")
-    for j, c in enumerate(raw):
+    for j, c in enumerate(raw if _SLIPS.search(raw) else ""):
         if c in "#;":
             break
         if c in _DASHES:
@@ -356,7 +366,8 @@ class _Parser:
                                f"{MAX_STATEMENTS}", self.source, 0, 0,
                                "a smaller network (see 'mechcirc reduce')")
         parsed = self._split(lines)
-        check_param_names(self.overrides, self.param_lines, self.source)
+        if self.overrides:
+            check_param_names(self.overrides, self.param_lines, self.source)
         self._build(parsed)
         self._check_complete(parsed)
         self._check_initial()
@@ -428,8 +439,9 @@ class _Parser:
 
     def _check_initial(self) -> None:
         """Each ``.ic`` names a node some element uses, other than the frame, once."""
-        # (the elements' nodes only when needed: a netlist may have 10⁶ elements)
-        known = {n for e in self.elements for n in (e.n1, e.n2)} if self.initial else set()
+        if not self.initial:        # (no pass over the nodes of 10⁶ elements for nothing)
+            return
+        known = {n for e in self.elements for n in (e.n1, e.n2)}
         known |= {n for lv in self.levers for n in lv.terminals}
         known |= {n for d in self.drives for n in (d.n1, d.n2)}
         seen_ic: dict[str, int] = {}
@@ -449,14 +461,15 @@ class _Parser:
             seen_ic[node] = lineno
 
     def _circuit(self) -> Circuit:
-        name = Path(self.source).stem if self.source != "<string>" else "circuit"
+        name = _stem(self.source) if self.source != "<string>" else "circuit"
         drive = self.drives[0] if self.drives else None
         if drive is not None:
             rot = self.drive_rotational
             if rot is None:     # rotary when its nodes carry rotary units only
                 kinds = [self.node_kinds.get(n, {}) for n in (drive.n1, drive.n2)]
                 rot = any(True in k for k in kinds) and not any(False in k for k in kinds)
-            drive = dataclasses.replace(drive, rotational=rot)
+            # (the parser's own new Drive, not yet seen by anyone: set, not replaced)
+            object.__setattr__(drive, "rotational", rot)
         elements, levers, params = tuple(self.elements), tuple(self.levers), dict(self.params)
         return Circuit(elements=elements, drive=drive, levers=levers, name=name,
                        source=self.source, params=params,
@@ -888,6 +901,18 @@ def _materialise(expressions: dict) -> dict:
         else:
             out[key] = entry
     return out
+
+
+def _stem(source: str) -> str:
+    """``Path(source).stem``, without building the path where the file name is plain:
+    a last component neither empty nor ``.``, whose stem has a character other than ``.``
+    (there every Python's pathlib agrees)."""
+    name = source.rpartition("/")[2]
+    i = name.rfind(".")
+    if os.sep != "/" or name in ("", ".") or 0 <= i and not (i < len(name) - 1 and
+                                                           name[:i].lstrip(".")):
+        return Path(source).stem
+    return name if i < 0 else name[:i]
 
 
 def parse(text: str, source: str = "<string>", *,
