@@ -31,6 +31,18 @@ def test_keywords_case_insensitive_and_integer_nodes_normalised():
     assert c.element("m").n1 == "1" and c.drive.n2 == "0"
 
 
+def test_integer_names_of_any_length_are_normalised_not_refused():
+    # Python's int() refuses more than 4300 digits: a long integer name is still a name
+    # (both paths: the plain line and the general one, here made general by eta={1})
+    long = "0" + "7" * 5000
+    for eta in ("", " eta={1}"):
+        c = mechcirc.parse(f"mass {long} {long} 0 1{eta}\nspring k 00{long} 0 2{eta}\n"
+                           f"drive V {long} 0 velocity=1\n")
+        assert [e.name for e in c.elements] == [long[1:], "k"]
+        assert c.elements[0].n1 == c.elements[1].n1 == c.drive.n1 == long[1:]
+        assert str(c.tree) == f"{long[1:]} | k"
+
+
 def _error(text):
     with pytest.raises(NetlistError) as info:
         mechcirc.parse(text, source="bad.mcir")
