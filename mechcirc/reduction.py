@@ -298,9 +298,8 @@ def _join(x, sx: int, y, sy: int, series: bool):
     of the two when both are runs, so the whole reduction stays linear (the run
     then keeps its own orientation).
     """
-    xr = _KINDS.get(type(x)) is series
-    yr = _KINDS.get(type(y)) is series
-    if xr and (not yr or len(x.children) >= len(y.children)):
+    kx, ky = _KINDS.get(type(x)), _KINDS.get(type(y))
+    if kx is series and (ky is not series or len(x.children) >= len(y.children)):
         if type(x) is _NODE[series]:
             x = _RUN[series](list(x.children), list(x.signs))
         if not series or sx > 0:
@@ -309,7 +308,7 @@ def _join(x, sx: int, y, sy: int, series: bool):
             # x runs against the path: in x's orientation y (reversed) comes first.
             x.prepend(*_operands(y, -sy, True))
         return x, sx < 0
-    if yr:
+    if ky is series:
         if type(y) is _NODE[series]:
             y = _RUN[series](list(y.children), list(y.signs))
         if not series or sy > 0:
@@ -317,8 +316,11 @@ def _join(x, sx: int, y, sy: int, series: bool):
         else:
             y.extend(*_operands(x, -sx, True))
         return y, sy < 0
-    x, sx = _close(x, sx)
-    y, sy = _close(y, sy)
+    # (_close but where it would change nothing: a leaf, a reflection, a node as it stands)
+    if kx is not None and (sx < 0 or type(x) is not _NODE[kx]):
+        x, sx = _close(x, sx)
+    if ky is not None and (sy < 0 or type(y) is not _NODE[ky]):
+        y, sy = _close(y, sy)
     return _branches(_NODE[series], (x, y), (sx, sy)), False
 
 
