@@ -93,11 +93,13 @@ _VALUE_INDEX = {"mass": 3, "spring": 3, "damper": 3}
 # does not pass sends the line to the general path, so each error message
 # comes from the same code as before.
 # Possessive quantifiers (``*+``, ``++``, ``?+``): no field can give back a character the
-# next one would take, so backtracking into them never finds a match (25% faster).
-_FAST_NAME = r"([A-Za-z_][A-Za-z0-9_]*+|[0-9]++)"
+# next one would take, so backtracking into them never finds a match (25% faster).  An
+# integer name with a leading zero (node 00 is 0) takes the general path, so that a
+# matched line's names are the Element's as they stand.
+_FAST_NAME = r"([A-Za-z_][A-Za-z0-9_]*+|[1-9][0-9]*+|0)"
 _FAST_NUMBER = r"((?:[0-9]++\.?+[0-9]*+|\.[0-9]++)(?:[eE][-+]?+[0-9]++)?+)"
 _FAST = re.compile(
-    r"([ \t]*+)([A-Za-z]++)[ \t]++" + _FAST_NAME + r"[ \t]++" + _FAST_NAME + r"[ \t]++"
+    r"([ \t]*+)((?i:mass|spring|damper))[ \t]++" + _FAST_NAME + r"[ \t]++" + _FAST_NAME + r"[ \t]++"
     + _FAST_NAME + r"[ \t]++" + _FAST_NUMBER
     + r"(?:[ \t]++([A-Za-z\u00b5\u03bc][A-Za-z0-9*/^\-\u00b7\u00b2\u00b3\u00b5\u03bc]*+))?"
     + r"(?:[ \t]++eta=" + _FAST_NUMBER + r")?+[ \t]*+(?:[#;].*+)?+")
@@ -388,11 +390,12 @@ class _Parser:
                 raise NetlistError(f"line is {len(raw)} characters long, the limit is "
                                    f"{MAX_LINE_LENGTH}", self.source, lineno, 1)
             m = fast(raw)
-            if m is not None and (kind := _FAST_KINDS.get(m.group(2).lower())) is not None:
+            if m is not None:
                 if run is None:
                     run = []
                     parsed.append(run)
-                run.append((lineno, kind, m))
+                kind = m.group(2)
+                run.append((lineno, _FAST_KINDS.get(kind) or _FAST_KINDS[kind.lower()], m))
                 continue
             run = None
             line = _Line(raw, self.source, lineno)
@@ -627,10 +630,6 @@ class _Parser:
         append, unit_of, inf, make = elements.append, _unit, math.inf, _make_element
         for lineno, kind, m in run:
             indent, _, name, n1, n2, number, unit, eta_text = m.groups()
-            # node 00 is 0: only an integer with a leading 0 changes ("0" < x < "1")
-            name = name.lstrip("0") or "0" if "0" < name < "1" else name
-            n1 = n1.lstrip("0") or "0" if "0" < n1 < "1" else n1
-            n2 = n2.lstrip("0") or "0" if "0" < n2 < "1" else n2
             value = raw = float(number)
             eta = 1.0 if eta_text is None else float(eta_text)
             u = None
