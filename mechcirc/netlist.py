@@ -39,7 +39,7 @@ import os
 import re
 import warnings
 from dataclasses import fields
-from typing import Mapping, NamedTuple, NoReturn
+from typing import Any, Mapping, NamedTuple, NoReturn, cast
 from pathlib import Path
 
 from .circuit import ELEMENT_UNITS, Circuit, Drive, Element, ElementKind, Lever
@@ -104,6 +104,10 @@ _FAST = re.compile(
     + r"(?:[ \t]++([A-Za-z\u00b5\u03bc][A-Za-z0-9*/^\-\u00b7\u00b2\u00b3\u00b5\u03bc]*+))?"
     + r"(?:[ \t]++eta=" + _FAST_NUMBER + r")?+[ \t]*+(?:[#;].*+)?+")
 _FAST_KINDS: dict[str, ElementKind] = {"mass": "mass", "spring": "spring", "damper": "damper"}
+#: A plain drive line: ``drive NAME N1 N2 velocity=NUMBER`` (or force=), no unit.
+_FAST_DRIVE = re.compile(
+    r"([ \t]*+)(?i:drive)[ \t]++" + _FAST_NAME + r"[ \t]++" + _FAST_NAME + r"[ \t]++"
+    + _FAST_NAME + r"[ \t]++(velocity|force)=" + _FAST_NUMBER + r"[ \t]*+(?:[#;].*+)?+")
 
 _new = object.__new__
 
@@ -398,6 +402,9 @@ class _Parser:
                 run.append((lineno, _FAST_KINDS.get(kind) or _FAST_KINDS[kind.lower()], m))
                 continue
             run = None
+            if (m := _FAST_DRIVE.fullmatch(raw)) is not None:
+                parsed.append((lineno, m))          # read by fast_drive
+                continue
             line = _Line(raw, self.source, lineno)
             if not line.tokens:
                 continue
@@ -421,6 +428,9 @@ class _Parser:
         for line in parsed:
             if type(line) is list:
                 self.fast_elements(line)
+                continue
+            if type(line) is tuple:
+                self.fast_drive(*line)
                 continue
             keyword = line.tokens[0].text.lower()
             if keyword not in handlers:
@@ -652,6 +662,19 @@ class _Parser:
             if u is not None:
                 self._note_kind(lineno, name, u, unit, m.start(7) + 1, (n1, n2))
             append(make(kind, name, n1, n2, value, eta, lineno, len(indent) + 1))
+
+    def fast_drive(self, lineno: int, m: re.Match[str]) -> None:
+        """The Drive of a line matched by ``_FAST_DRIVE``, as :meth:`drive` makes it; a
+        line that fails any check goes to :meth:`drive`, which reports it."""
+        indent, name, n1, n2, key, number = cast(Any, m.groups())   # key: velocity|force
+        value = float(number)
+        if self.drives or name in self.names or n1 == n2 or value == math.inf:
+            self.drive(_Line(m.string, self.source, lineno), "drive")
+            return
+        self.names[name] = lineno
+        self.expressions[(name, key)] = (Expr("num", 0, value), 1.0)     # parse_expression's
+        self.drive_rotational = None
+        self.drives.append(Drive(name, n1, n2, key, value, lineno, len(indent) + 1))
 
     def element(self, line: _Line, kind: ElementKind):
         allowed = ("eta", "backlash", "damping") if kind == "spring" else ("eta",)
