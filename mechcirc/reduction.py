@@ -111,9 +111,9 @@ def reduce_network(elements, levers, a: str, b: str, *, drive_line: int = 0,
     if not levers:
         # The common case, without the per-element ``_Edge`` records.
         tree = _reduce_edges([e.n1 for e in elements], [e.n2 for e in elements],
-                             [Leaf(e) for e in elements], a, b, unloaded, drive_line, source)
+                             [_leaf(e) for e in elements], a, b, unloaded, drive_line, source)
     else:
-        edges = [_Edge(e.n1, e.n2, Leaf(e)) for e in elements]
+        edges = [_Edge(e.n1, e.n2, _leaf(e)) for e in elements]
         tree = _reduce(edges, list(levers), a, b, unloaded, drive_line, source)
     if len(unloaded) > 1:
         # In the order the elements were given (the fast path finds them by the
@@ -190,61 +190,101 @@ def _reduce_edges(n1s: list, n2s: list, nodes: list, a: str, b: str, unloaded: l
     return root
 
 
+_new = object.__new__
+
+
+def _leaf(element) -> Leaf:
+    """``Leaf(element)`` without the frozen dataclass's ``__init__`` (its
+    ``object.__setattr__``; 30% of the cost): the same object (while Leaf has that one
+    field: tests/test_reduction.py compares them)."""
+    node = _new(Leaf)
+    node.__dict__["element"] = element
+    return node
+
+
+def _branches(cls, children: tuple, signs: tuple):
+    """``cls(children, signs)`` for Series or Parallel, as :func:`_leaf` (40% of the cost)."""
+    node = _new(cls)
+    d = node.__dict__
+    d["children"] = children
+    d["signs"] = signs
+    return node
+
+
 class _Run:
-    """A series or parallel run being built: its operands, in the run's own
-    orientation (the edge's n1 → n2 when stored), with their signs.
+    """A series or parallel run being grown (:class:`_SeriesRun`, :class:`_ParallelRun`):
+    its operands, in the run's own orientation (the edge's n1 → n2 when stored), with
+    their signs.
 
-    ``kids`` and ``signs`` are lists, turned into deques the first time a long
-    run must grow at its front (so that growing stays O(1) per operand)."""
+    A join of two operands neither of which is a run of its kind makes the
+    finished Series or Parallel node at once (most runs end at two operands, as
+    in a ladder); only a third operand reopens it as a run, whose ``children``
+    and ``signs`` are lists, turned into deques the first time a long run must
+    grow at its front (so that growing stays O(1) per operand)."""
 
-    __slots__ = ("series", "kids", "signs")
+    __slots__ = ("children", "signs")
 
-    def __init__(self, series: bool, kids: list, signs: list):
-        self.series = series
-        self.kids: Any = kids              # list, or deque once grown at the front
+    def __init__(self, children: list, signs: list):
+        self.children: Any = children      # list, or deque once grown at the front
         self.signs: Any = signs
 
-    def extend(self, kids: tuple, signs: tuple) -> None:
-        self.kids.extend(kids)
+    def extend(self, children: tuple, signs: tuple) -> None:
+        self.children.extend(children)
         self.signs.extend(signs)
 
-    def prepend(self, kids: tuple, signs: tuple) -> None:
-        if type(self.kids) is list:
-            if len(self.kids) < 64:
-                self.kids[:0] = kids
+    def prepend(self, children: tuple, signs: tuple) -> None:
+        if type(self.children) is list:
+            if len(self.children) < 64:
+                self.children[:0] = children
                 self.signs[:0] = signs
                 return
-            self.kids, self.signs = deque(self.kids), deque(self.signs)
-        self.kids.extendleft(reversed(kids))
+            self.children, self.signs = deque(self.children), deque(self.signs)
+        self.children.extendleft(reversed(children))
         self.signs.extendleft(reversed(signs))
 
 
-def _oriented(run: _Run, sign: int) -> tuple[tuple, tuple]:
-    """The operands of ``run`` and their signs, turned to the orientation ``sign``
-    (a series run reversed runs its operands in the opposite order)."""
+class _SeriesRun(_Run):
+    __slots__ = ()
+
+
+class _ParallelRun(_Run):
+    __slots__ = ()
+
+
+#: The kind of a run: True series, False parallel (a Leaf or a Reflect: none); an
+#: edge's Series or Parallel node is a run of two that may still grow.
+_KINDS: dict[type, bool] = {Series: True, Parallel: False, _SeriesRun: True,
+                            _ParallelRun: False}
+#: Kind -> (its finished node, its run).
+_NODE = {True: Series, False: Parallel}
+_RUN = {True: _SeriesRun, False: _ParallelRun}
+
+
+def _oriented(run, sign: int, series: bool) -> tuple[tuple, tuple]:
+    """The operands of ``run`` (a run of kind ``series``) and their signs, turned to the
+    orientation ``sign`` (a series run reversed runs its operands in the opposite order)."""
     if sign > 0:
-        return tuple(run.kids), tuple(run.signs)
-    if run.series:
-        return tuple(reversed(run.kids)), tuple(-s for s in reversed(run.signs))
-    return tuple(run.kids), tuple(-s for s in run.signs)
+        return tuple(run.children), tuple(run.signs)
+    if series:
+        return tuple(reversed(run.children)), tuple(-s for s in reversed(run.signs))
+    return tuple(run.children), tuple(-s for s in run.signs)
 
 
 def _close(node, sign: int):
     """``(node, sign)`` as a finished child: a run becomes a flat Series/Parallel
     turned to the parent's orientation (so that only leaves and lever
     reflections carry signs), leaves keep theirs."""
-    if type(node) is not _Run:
+    series = _KINDS.get(type(node))
+    if series is None or sign > 0 and type(node) is _NODE[series]:
         return node, sign
-    return (Series if node.series else Parallel)(*_oriented(node, sign)), 1
+    return _branches(_NODE[series], *_oriented(node, sign, series)), 1
 
 
 def _operands(node, sign: int, series: bool):
     """The operands ``node`` contributes to a run of kind ``series``, oriented by ``sign``:
     its own operands when it is a run of the same kind, else itself closed."""
-    if type(node) is not _Run:
-        return (node,), (sign,)
-    if node.series == series:
-        return _oriented(node, sign)
+    if _KINDS.get(type(node)) is series:
+        return _oriented(node, sign, series)
     c, s = _close(node, sign)
     return (c,), (s,)
 
@@ -258,26 +298,30 @@ def _join(x, sx: int, y, sy: int, series: bool):
     of the two when both are runs, so the whole reduction stays linear (the run
     then keeps its own orientation).
     """
-    xr = type(x) is _Run and x.series == series
-    yr = type(y) is _Run and y.series == series
-    if xr and (not yr or len(x.kids) >= len(y.kids)):
+    kx, ky = _KINDS.get(type(x)), _KINDS.get(type(y))
+    if kx is series and (ky is not series or len(x.children) >= len(y.children)):
+        if type(x) is _NODE[series]:
+            x = _RUN[series](list(x.children), list(x.signs))
         if not series or sx > 0:
             x.extend(*_operands(y, sy * sx, series))
         else:
             # x runs against the path: in x's orientation y (reversed) comes first.
             x.prepend(*_operands(y, -sy, True))
         return x, sx < 0
-    if yr:
+    if ky is series:
+        if type(y) is _NODE[series]:
+            y = _RUN[series](list(y.children), list(y.signs))
         if not series or sy > 0:
             y.prepend(*_operands(x, sx * sy, series))
         else:
             y.extend(*_operands(x, -sx, True))
         return y, sy < 0
-    if type(x) is _Run:
+    # (_close but where it would change nothing: a leaf, a reflection, a node as it stands)
+    if kx is not None and (sx < 0 or type(x) is not _NODE[kx]):
         x, sx = _close(x, sx)
-    if type(y) is _Run:
+    if ky is not None and (sy < 0 or type(y) is not _NODE[ky]):
         y, sy = _close(y, sy)
-    return _Run(series, [x, y], [sx, sy]), False
+    return _branches(_NODE[series], (x, y), (sx, sy)), False
 
 
 def _series_parallel_runs(n1s: list, n2s: list, nodes: list, a: str, b: str,

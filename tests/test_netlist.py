@@ -31,6 +31,18 @@ def test_keywords_case_insensitive_and_integer_nodes_normalised():
     assert c.element("m").n1 == "1" and c.drive.n2 == "0"
 
 
+def test_integer_names_of_any_length_are_normalised_not_refused():
+    # Python's int() refuses more than 4300 digits: a long integer name is still a name
+    # (both paths: the plain line and the general one, here made general by eta={1})
+    long = "0" + "7" * 5000
+    for eta in ("", " eta={1}"):
+        c = mechcirc.parse(f"mass {long} {long} 0 1{eta}\nspring k 00{long} 0 2{eta}\n"
+                           f"drive V {long} 0 velocity=1\n")
+        assert [e.name for e in c.elements] == [long[1:], "k"]
+        assert c.elements[0].n1 == c.elements[1].n1 == c.drive.n1 == long[1:]
+        assert str(c.tree) == f"{long[1:]} | k"
+
+
 def _error(text):
     with pytest.raises(NetlistError) as info:
         mechcirc.parse(text, source="bad.mcir")
@@ -174,20 +186,52 @@ from mechcirc import netlist as _nl  # noqa: E402
 
 
 def _outcome(text, *, fast):
-    """(elements, expressions, warnings) or the error text, by either path."""
-    saved = _nl._FAST
+    """(elements, drive, expressions, warnings) or the error text, by either path."""
+    saved = _nl._FAST, _nl._FAST_DRIVE
     if not fast:
-        _nl._FAST = re.compile(r"(?!)")           # matches nothing: all lines general
+        _nl._FAST = _nl._FAST_DRIVE = re.compile(r"(?!)")   # matches nothing: all general
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            c = mechcirc.parse(text, source="t.mcir")
-        return (c.elements, list(_nl.expressions_of(c).items()),
+            c = mechcirc.parse(text, source="t.mcir", require_drive=False)
+        return (c.elements, c.drive, list(_nl.expressions_of(c).items()),
                 [str(w.message) for w in caught])
     except NetlistError as exc:
         return str(exc)
     finally:
-        _nl._FAST = saved
+        _nl._FAST, _nl._FAST_DRIVE = saved
+
+
+def test_random_drive_lines_parse_alike_on_both_paths():
+    """Drive lines near the plain drive's shape (good and bad, one or two of them, names
+    taken or not): same drive, expressions and warnings, or the same error."""
+    rng = random.Random(16)
+    fast_drives = 0
+    original = _nl._Parser.fast_drive
+
+    def counting(self, *a):
+        nonlocal fast_drives
+        fast_drives += 1
+        return original(self, *a)
+
+    fields = [["drive", "DRIVE", "Drive", "driv", "drive\x0b"], ["V", "m", "0", "007", "_v", "1a"],
+              ["a", "b", "0", "00", "V"], ["0", "a", "b", "1"],
+              ["velocity=1", "force=2.5", "velocity=.5e3", "force=0", "velocity=1e999",
+               "Velocity=1", "velocity=1 m/s", "force=2kN", "velocity={1}", "velocity= 1",
+               "velocity=1 force=2", "velocity=-1", "force=3 N", "velocity=1,5"]]
+    for _trial in range(600):
+        lines = ["mass m a 0 1", "spring k a b 1e3", "damper c b 0 2"]
+        for _ in range(rng.choice([1, 1, 1, 2])):
+            lines.insert(rng.randint(0, len(lines)), rng.choice(["", " ", "\t"]) + " ".join(
+                rng.choice(f) for f in fields) + rng.choice(["", " # x", ";y", " \t"]))
+        text = "\n".join(lines) + "\n"
+        _nl._Parser.fast_drive = counting
+        try:
+            fast = _outcome(text, fast=True)
+        finally:
+            _nl._Parser.fast_drive = original
+        assert fast == _outcome(text, fast=False), text
+    assert fast_drives > 50             # the plain drive's path was exercised (75)
 
 
 @pytest.mark.parametrize("line, message", [
@@ -241,7 +285,7 @@ def test_fast_path_taken_and_same_objects_as_the_general_path():
     assert calls == [2, 3, 4, 5, 6]
     general = _outcome(text, fast=False)
     assert fast == general
-    elements, exprs, caught = fast
+    elements, _, exprs, caught = fast
     assert elements[1].value == 1e8 and elements[1].col == 3 and elements[0].eta == 2.0
     assert dict(exprs)[("k1", "value")][1] == 1000.0
     assert len(caught) == 1 and caught[0].startswith("t.mcir:6:17: node 'b' gets a rotational")

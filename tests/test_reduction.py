@@ -351,7 +351,7 @@ def test_a_long_series_run_grown_at_its_front_keeps_every_spring(monkeypatch):
     prepend = reduction._Run.prepend
 
     def spy(self, kids, signs):
-        grown.append(len(self.kids))
+        grown.append(len(self.children))
         prepend(self, kids, signs)
 
     monkeypatch.setattr(reduction._Run, "prepend", spy)
@@ -366,6 +366,17 @@ def test_a_long_series_run_grown_at_its_front_keeps_every_spring(monkeypatch):
     ref = [complex(1j * mpmath.mpf(w) * compliance + 1 / (1j * mpmath.mpf(w) * 2.5))
            for w in omega]
     np.testing.assert_allclose(K, ref, rtol=1e-14)
+
+
+def test_fast_node_constructors_make_what_init_makes():
+    """reduction builds its nodes without the frozen dataclasses' __init__: the same
+    objects, field for field (a new field would make them differ here)."""
+    e = mechcirc.parse("mass m a 0 1\ndrive V a 0 velocity=1\n").elements[0]
+    leaf = reduction._leaf(e)
+    assert type(leaf) is reduction.Leaf and vars(leaf) == vars(reduction.Leaf(e))
+    for cls in (reduction.Series, reduction.Parallel):
+        made = reduction._branches(cls, (leaf, leaf), (1, -1))
+        assert type(made) is cls and vars(made) == vars(cls((leaf, leaf), (1, -1)))
 
 
 def test_plan_with_values_defaults_to_each_levers_own_ratio_for_many_designs():
