@@ -290,7 +290,7 @@ def cmd_frame(args) -> int:
     k = 1e-3 if args.unit == "mm" else 1.0            # to metres
     fb = FourBar(args.crank * k, args.coupler * k, args.rocker * k, args.frame * k,
                  branch=args.branch)
-    if fb.linkage_type != "crank-rocker" or not fb.crank_rotates_fully:
+    if not fb.is_full_turn_crank_rocker:
         raise MechcircError(
             f"frame loading needs a crank-rocker whose crank turns fully; this four-bar is a "
             f"{fb.grashof_class} {fb.linkage_type} (see mechcirc fourbar)")
