@@ -288,6 +288,22 @@ def _operands(node, sign: int, series: bool):
     return (c,), (s,)
 
 
+def _grown(run, s: int, other, so: int, series: bool, after: bool):
+    """:func:`_join`'s ``(run, flip)`` where ``run`` (sign ``s``), a run of kind ``series``
+    or its finished node, takes ``other`` (sign ``so``) ``after`` it on the path or
+    before it.  A series run kept against the path (s < 0) holds the path's order
+    reversed, so ``other`` goes to its other end; turned to the run's orientation,
+    ``other``'s sign is ``so·s`` (signs are ±1)."""
+    if type(run) is _NODE[series]:
+        run = _RUN[series](list(run.children), list(run.signs))
+    operands = _operands(other, so * s, series)
+    if (not series or s > 0) == after:
+        run.extend(*operands)
+    else:
+        run.prepend(*operands)
+    return run, s < 0
+
+
 def _join(x, sx: int, y, sy: int, series: bool):
     """The run of kind ``series`` of ``x`` then ``y`` with signs ``sx``, ``sy`` relative
     to the result's orientation ("path": for a series run, x's far end to y's).
@@ -299,22 +315,9 @@ def _join(x, sx: int, y, sy: int, series: bool):
     """
     kx, ky = _KINDS.get(type(x)), _KINDS.get(type(y))
     if kx is series and (ky is not series or len(x.children) >= len(y.children)):
-        if type(x) is _NODE[series]:
-            x = _RUN[series](list(x.children), list(x.signs))
-        if not series or sx > 0:
-            x.extend(*_operands(y, sy * sx, series))
-        else:
-            # x runs against the path: in x's orientation y (reversed) comes first.
-            x.prepend(*_operands(y, -sy, True))
-        return x, sx < 0
+        return _grown(x, sx, y, sy, series, True)
     if ky is series:
-        if type(y) is _NODE[series]:
-            y = _RUN[series](list(y.children), list(y.signs))
-        if not series or sy > 0:
-            y.prepend(*_operands(x, sx * sy, series))
-        else:
-            y.extend(*_operands(x, -sx, True))
-        return y, sy < 0
+        return _grown(y, sy, x, sx, series, False)
     # (_close but where it would change nothing: a leaf, a reflection, a node as it stands)
     if kx is not None and (sx < 0 or type(x) is not _NODE[kx]):
         x, sx = _close(x, sx)
