@@ -782,7 +782,7 @@ def _finish(ctx, main, other, counts, notes, warn, out=None, other_extrema=None,
         out = _outputs(model, kern, theta_s, ripple, ts, ys)
     extrema = _extrema(out)
     if check is None:
-        check = _extrema(out, sub)
+        check = extrema if sub is None else _extrema(out, sub)
     est = None
     if periodicity is None and prev is not None:
         periodicity = _rel_change(check, _output_extrema(model, kern, theta_s, ripple, *prev))
