@@ -202,35 +202,46 @@ def _outcome(text, *, fast):
         _nl._FAST, _nl._FAST_DRIVE = saved
 
 
+def _alike_on_both_paths(texts, method: str, size=lambda args: 1) -> int:
+    """Assert that each of ``texts`` parses alike on the plain-line path and the general
+    one; return how much the plain path's ``_Parser.method`` took (``size`` of each
+    call's arguments), so a test can show that path was exercised, not bypassed."""
+    taken = 0
+    original = getattr(_nl._Parser, method)
+
+    def counting(self, *a):
+        nonlocal taken
+        taken += size(a)
+        return original(self, *a)
+
+    for text in texts:
+        setattr(_nl._Parser, method, counting)
+        try:
+            fast = _outcome(text, fast=True)
+        finally:
+            setattr(_nl._Parser, method, original)
+        assert fast == _outcome(text, fast=False), text
+    return taken
+
+
 def test_random_drive_lines_parse_alike_on_both_paths():
     """Drive lines near the plain drive's shape (good and bad, one or two of them, names
     taken or not): same drive, expressions and warnings, or the same error."""
     rng = random.Random(16)
-    fast_drives = 0
-    original = _nl._Parser.fast_drive
-
-    def counting(self, *a):
-        nonlocal fast_drives
-        fast_drives += 1
-        return original(self, *a)
-
     fields = [["drive", "DRIVE", "Drive", "driv", "drive\x0b"], ["V", "m", "0", "007", "_v", "1a"],
               ["a", "b", "0", "00", "V"], ["0", "a", "b", "1"],
               ["velocity=1", "force=2.5", "velocity=.5e3", "force=0", "velocity=1e999",
                "Velocity=1", "velocity=1 m/s", "force=2kN", "velocity={1}", "velocity= 1",
                "velocity=1 force=2", "velocity=-1", "force=3 N", "velocity=1,5"]]
-    for _trial in range(600):
+
+    def text():
         lines = ["mass m a 0 1", "spring k a b 1e3", "damper c b 0 2"]
         for _ in range(rng.choice([1, 1, 1, 2])):
             lines.insert(rng.randint(0, len(lines)), rng.choice(["", " ", "\t"]) + " ".join(
                 rng.choice(f) for f in fields) + rng.choice(["", " # x", ";y", " \t"]))
-        text = "\n".join(lines) + "\n"
-        _nl._Parser.fast_drive = counting
-        try:
-            fast = _outcome(text, fast=True)
-        finally:
-            _nl._Parser.fast_drive = original
-        assert fast == _outcome(text, fast=False), text
+        return "\n".join(lines) + "\n"
+
+    fast_drives = _alike_on_both_paths((text() for _ in range(600)), "fast_drive")
     assert fast_drives > 50             # the plain drive's path was exercised (75)
 
 
@@ -311,27 +322,16 @@ def test_random_plain_lines_parse_alike_on_both_paths():
         good, bad = choices
         return rng.choice(good if rng.random() < 0.92 else bad)
 
-    fast_lines = 0
-    original = _nl._Parser.fast_elements
-
-    def counting(self, *a):
-        nonlocal fast_lines
-        fast_lines += len(a[0])
-        return original(self, *a)
-
-    for _trial in range(400):
+    def text():
         lines = ["drive V a 0 velocity=1"]
         for _ in range(rng.randint(1, 4)):
             lines.append(rng.choice(["", " ", "\t"]) + " ".join(
                 [pick(kinds), pick(names), pick(names), pick(names), pick(numbers)])
                 + pick(units) + pick(etas) + pick(tails))
-        text = "\n".join(lines) + "\n"
-        _nl._Parser.fast_elements = counting
-        try:
-            fast = _outcome(text, fast=True)
-        finally:
-            _nl._Parser.fast_elements = original
-        assert fast == _outcome(text, fast=False), text
+        return "\n".join(lines) + "\n"
+
+    fast_lines = _alike_on_both_paths((text() for _ in range(400)), "fast_elements",
+                                      lambda args: len(args[0]))
     assert fast_lines > 200           # the fast path was exercised, not bypassed
 
 
