@@ -71,6 +71,7 @@ MAX_LIFT = 1e100
 
 _TAU = 2 * math.pi
 _DEG = 6  # polynomial coefficients per piece: τ⁰ … τ⁵
+_FOURIER_BLOCK = 1 << 20  # (harmonic, piece end) pairs of Motion.fourier's scratch at once
 
 
 # ------------------------------------------------------------------ the laws
@@ -251,29 +252,40 @@ class Motion:
             return self._cache[key]
         start, length, a, sine = self._arrays()
         k = np.arange(1, kmax + 1, dtype=float) * (_TAU / self.period)
-        L = length[:, None]
-        phase0 = np.exp(-1j * np.outer(start, k))                      # e^{−jkθᵢ}
         # Polynomial part: q(τ) = Σ m aₘ τ^{m−1}; ∫₀ᴸ q e^{zτ} dτ with z = −jk is
-        # [e^{zτ} Σᵣ (−1)ʳ q⁽ʳ⁾(τ) / z^{r+1}]₀ᴸ.
+        # [e^{zτ} Σᵣ (−1)ʳ q⁽ʳ⁾(τ) / z^{r+1}]₀ᴸ, a piece's term e^{zL} q⁽ʳ⁾(L) − q⁽ʳ⁾(0) =
+        # (e^{zL} − 1) q⁽ʳ⁾(L) + (q⁽ʳ⁾(L) − q⁽ʳ⁾(0)): both small on a short piece (no
+        # cancellation), and with the phase e^{−jkθᵢ} two products over the pieces per k.
         q = a[:, 1:] * np.arange(1, _DEG)                               # q's coefficients
-        z = -1j * k[None, :]
-        eL = np.exp(z * L)
-        acc = np.zeros((start.size, k.size), dtype=complex)
-        sign = 1.0
-        zpow = z
-        for _ in range(_DEG - 1):           # q⁽ʳ⁾ for r = 0 … 4, the last a constant
-            qL = np.polynomial.polynomial.polyval(length, q.T, tensor=False)       # q⁽ʳ⁾(L), per piece
-            acc += sign * (eL * qL[:, None] - q[:, 0, None]) / zpow
+        ends = np.empty((2, start.size, _DEG - 1))          # q⁽ʳ⁾ at each piece's end, start
+        for r in range(_DEG - 1):           # q⁽ʳ⁾ for r = 0 … 4, the last a constant
+            ends[0, :, r] = np.polynomial.polynomial.polyval(length, q.T, tensor=False)
+            ends[1, :, r] = q[:, 0]
             q = q[:, 1:] * np.arange(1, q.shape[1])
-            sign = -sign
-            zpow = zpow * z
-        # Sinusoid part: B w cos(wτ + φ) = (Bw/2)(e^{j(wτ+φ)} + e^{−j(wτ+φ)}).
-        B, w, phi = sine[:, 0:1], sine[:, 1:2], sine[:, 2:3]
-        for sgn in (1.0, -1.0):
-            alpha = sgn * w - k[None, :]
-            integral = L * np.exp(0.5j * alpha * L) * np.sinc(alpha * L / (2 * math.pi))
-            acc += 0.5 * B * w * np.exp(1j * sgn * phi) * integral
-        c = (phase0 * acc).sum(axis=0) / self.period
+        ends *= (-1.0) ** np.arange(_DEG - 1)                   # (−1)ʳ q⁽ʳ⁾
+        # Sinusoid part (pieces with B ≠ 0 only): B w cos(wτ + φ) =
+        # (Bw/2)(e^{j(wτ+φ)} + e^{−j(wτ+φ)}), each ∫₀ᴸ e^{jατ} = L e^{jαL/2} sinc(αL/2).
+        live = sine[:, 0] != 0.0
+        B, w, phi = sine[live, 0:1], sine[live, 1:2], sine[live, 2:3]
+        L = length[live, None]
+        c = np.empty(k.size, dtype=complex)
+        step = max(1, _FOURIER_BLOCK // start.size)   # k in blocks: bounded scratch
+        for k0 in range(0, k.size, step):
+            kk = k[k0:k0 + step]
+            phase = np.exp(-1j * np.outer(kk, start))                      # e^{−jkθᵢ}
+            half = np.sin(0.5 * np.outer(kk, length))
+            turn = (-2 * half * half - 1j * np.sin(np.outer(kk, length))) * phase
+            sums = turn @ ends[0] + phase @ (ends[0] - ends[1])             # (k, r)
+            z = -1j * kk
+            acc = np.zeros(kk.size, dtype=complex)
+            for r in range(_DEG - 2, -1, -1):                             # Σᵣ sumsᵣ / z^{r+1}
+                acc = (acc + sums[:, r]) / z
+            for sgn in (1.0, -1.0):
+                alpha = sgn * w - kk[None, :]
+                integral = L * np.exp(0.5j * alpha * L) * np.sinc(alpha * L / (2 * math.pi))
+                acc += (phase[:, live].T * (0.5 * B * w * np.exp(1j * sgn * phi) * integral)
+                        ).sum(axis=0)
+            c[k0:k0 + step] = acc / self.period
         if len(self._cache) > 16:
             self._cache.clear()
         self._cache[key] = c
