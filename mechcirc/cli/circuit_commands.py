@@ -140,8 +140,8 @@ def cmd_check(args) -> int:
         "nodes": circuit.nodes, "elements": elements, "levers": levers,
         "unloaded": list(unloaded), "warnings": warns, "tree": tree,
     }
-    if getattr(args, "explain", False):
-        from ..explain import explain
+    if args.explain:
+        from ..explain import explain, explain_lines
 
         steps, root = explain(circuit)
         doc["steps"] = [dict(vars(s)) for s in steps]     # Step's fields: label, kind, ...
@@ -150,9 +150,7 @@ def cmd_check(args) -> int:
         return print_json(doc)
     print(f"{args.file}: {len(elements)} elements, {len(levers)} levers, "
           f"{len(circuit.nodes)} nodes")
-    if getattr(args, "explain", False):
-        from ..explain import explain_lines
-
+    if args.explain:
         warning_lines(warns)
         print("\n".join(explain_lines(circuit)))
         return 0
@@ -191,16 +189,15 @@ def _omega_grid(args):
         # One point would be --omega-min alone: the band and its peak need both ends.
         raise MechcircError(f"--points must be between 2 and {MAX_SWEEP_POINTS} (a sweep "
                             f"spans --omega-min to --omega-max), got {n}")
-    for wanted, limit, what in ((args.plot, MAX_PLOT_POINTS, "--plot"),
-                                (args.json, MAX_JSON_POINTS, "--json"),
-                                (args.method == "nodal", MAX_NODAL_POINTS, "--method nodal"),
-                                (getattr(args, "node", None), MAX_NODAL_POINTS, "--node")):
+    larger = "write larger sweeps with -o CSV"
+    for wanted, limit, what, why in (
+            (args.plot, MAX_PLOT_POINTS, "--plot", larger),
+            (args.json, MAX_JSON_POINTS, "--json", larger),
+            (args.method == "nodal", MAX_NODAL_POINTS, "--method nodal", larger),
+            (args.node, MAX_NODAL_POINTS, "--node", larger),
+            (args.sensitivity, MAX_NODAL_POINTS, "--sensitivity", "a nodal solve at each")):
         if wanted and n > limit:
-            raise MechcircError(f"--points {n} with {what}: the limit is {limit} points "
-                                "(write larger sweeps with -o CSV)")
-    if args.sensitivity and n > MAX_NODAL_POINTS:
-        raise MechcircError(f"--points {n} with --sensitivity: the limit is "
-                            f"{MAX_NODAL_POINTS} points (a nodal solve at each)")
+            raise MechcircError(f"--points {n} with {what}: the limit is {limit} points ({why})")
     if args.log:
         if lo <= 0:
             raise MechcircError("--log needs --omega-min > 0")
@@ -397,11 +394,8 @@ def _sensitivity_columns(sens) -> dict:
     if sens is None:
         return {}
     q = sens.quantity
-    out = {}
-    for name in sens.dK:
-        out[f"d{q}_d{name}"] = sens.derivative(name)
-        out[f"rel{q}_{name}"] = sens.relative(name)
-    return out
+    return {column: values for name in sens.dK for column, values in (
+        (f"d{q}_d{name}", sens.derivative(name)), (f"rel{q}_{name}", sens.relative(name)))}
 
 
 def _print_sweep_sensitivity(sens, result) -> None:
