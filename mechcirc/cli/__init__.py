@@ -19,7 +19,7 @@ import signal
 import sys
 import threading
 
-from ..errors import shorten
+from ..errors import did_you_mean, shorten
 
 __all__ = ["main", "build_parser", "one_blas_thread"]
 
@@ -62,8 +62,6 @@ class _Parser(argparse.ArgumentParser):
         return super().parse_known_args(args, namespace)
 
     def error(self, message):
-        from ..sources import did_you_mean
-
         # 'invalid choice: 'swep' (choose from 'check', 'sweep', ...)': name the nearest
         m = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
         if m:
@@ -93,8 +91,6 @@ class _Parser(argparse.ArgumentParser):
     def _option_hint(self, word: str) -> str:
         """The nearest option of the command given, or which commands take ``word`` when
         it is another command's option (any command's nearest when none was given)."""
-        from ..sources import did_you_mean
-
         subs = {name: p for action in self._actions
                 if isinstance(action, argparse._SubParsersAction)
                 for name, p in action.choices.items()}
@@ -115,8 +111,6 @@ class _Parser(argparse.ArgumentParser):
     def _value_hint(self, word: str) -> str:
         """``"; did you mean '--load medium'?"`` when ``word`` is near a choice of an option
         of the command given (``mechcirc synth medum``)."""
-        from ..sources import did_you_mean
-
         for action in self._actions:
             if isinstance(action, argparse._SubParsersAction) and self.given in action.choices:
                 for opt in action.choices[self.given]._actions:

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import (MAX_QUOTED, InputError, MechcircError, MechcircWarning, NetlistError,
-                      NotSeriesParallelError, clip, shorten)
+                      NotSeriesParallelError, clip, did_you_mean, shorten)
 from ..units import (FREQUENCY_UNITS, UnitError, in_unit, in_unit_of, is_bare_number,
                      parse_quantity, parse_unit)
 
@@ -665,8 +665,6 @@ def set_values(items, not_numbers: dict | None = None, texts: bool = False,
         A text without ``=``, a name of ``not_numbers`` or not of ``roles``, or a value
         that is not such a number (in its role's unit).
     """
-    from ..sources import did_you_mean
-
     out, words = {}, not_numbers or {}
     for item in items:
         name, sep, value = item.partition("=")
@@ -756,8 +754,6 @@ def check_names(names, known, kind: str = "element", option: str = "--element") 
         Naming the first unknown name, the nearest known one and at most
         :data:`SHOWN_NAMES` of the known names.
     """
-    from ..sources import did_you_mean
-
     known = list(known)
     bad = [n for n in names or () if n not in known]
     if bad:

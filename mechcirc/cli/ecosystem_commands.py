@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..errors import MechcircError
+from ..errors import MechcircError, did_you_mean
 from ..limits import FORMULA_SECONDS
 from ._common import (NETLIST_FILE, Default, add_command, add_handler, add_method_option,
                       add_output_option, add_plot_option, add_unit_option, band_omega,
@@ -207,8 +207,6 @@ def cmd_formula(args) -> int:
 def _plot_column(args, spec) -> str:
     """The result column ``--plot`` draws: ``--plot-column`` (checked, with did-you-mean;
     refused without ``--plot``) or the analysis's default."""
-    from ..sources import did_you_mean
-
     column = args.plot_column or ("Q0_abs_max" if spec.analysis == "sweep" else "resonance_1")
     results = spec.columns[len(spec.params) + 3:]
     if args.plot and column not in results:

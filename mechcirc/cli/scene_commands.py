@@ -7,6 +7,7 @@ import warnings
 
 from ..errors import MechcircError
 from ..limits import MAX_CYCLE_POINTS
+from ..progress import Progress
 from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (NETLIST_FILE, Default, add_command, add_handler, add_output_option,
                       add_plot_option, add_unit_option, check_output_paths, count, crank_angle,
@@ -161,8 +162,6 @@ def _cycle(args, scene) -> int:
 
     from ..scene.cycle import cycle_map, plot_cycle
 
-    from ..progress import Progress
-
     with Progress(args.points, "crank angles") as bar:
         cmap = cycle_map(scene, points=args.points, harmonics=args.harmonics,
                          reflect=args.reflect, progress=bar)
@@ -310,7 +309,6 @@ def _print_contact(c: dict) -> None:
 def _simulate_with_bar(args, scene):
     """:func:`simulate_scene` as the options say, with a progress bar on a terminal; the
     accuracy warnings stay in the result's notes."""
-    from ..progress import Progress
     from ..scene.simulation import SceneAccuracyWarning, simulate_scene
 
     # The total is set by the first progress(done, total).

@@ -7,6 +7,7 @@ import math
 from ..errors import InputError
 from ..limits import (MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_SCIPY_REVOLUTIONS,
                       METHODS, SCIPY_METHODS)
+from ..progress import Progress
 from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (Default, add_command, add_handler, add_output_option, add_plot_option,
                       add_unit_option, check_output_paths, count, crank_angle, positive_omega,
@@ -245,8 +246,6 @@ def cmd_simulate(args) -> int:
     except ValueError:
         raise ParameterError(f"--variant must be 1-7 or 'all', got {args.variant!r}") from None
     params = preset(args.drive, variant, **over)
-    from ..progress import Progress
-
     with Progress(0, params.label) as bar:     # total set by the first progress(done, total)
         result = simulate_params(params, args.revolutions, args.method, progress=bar, **opts)
     from ..sley.plots import plot_result
@@ -290,8 +289,6 @@ def cmd_crosscheck(args) -> int:
     check_output_paths(args.netlist, table="the netlist", option="--netlist")
     params = preset(args.drive, args.variant)
     theta0 = start_angle(params) if args.theta is None else math.radians(args.theta)
-    from ..progress import Progress
-
     with Progress(4, "crosscheck") as bar:      # drawn on a terminal after 1 s
         doc, netlist = crosscheck_sley(params, theta0, on_step=bar.update)
     if args.netlist:
