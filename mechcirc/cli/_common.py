@@ -137,11 +137,10 @@ def _run(args) -> int:
         print(str(exc) if located else f"{where}: error: {exc}" if where
               else f"mechcirc: error: {exc}", file=sys.stderr)
         return EXIT_USER
-    except FileNotFoundError as exc:
-        print(f"{_name(exc)}: error: no such file", file=sys.stderr)
-        return EXIT_USER
-    except IsADirectoryError as exc:
-        print(f"{_name(exc)}: error: is a directory, expected a file", file=sys.stderr)
+    except (FileNotFoundError, IsADirectoryError) as exc:
+        what = "no such file" if isinstance(exc, FileNotFoundError) else \
+            "is a directory, expected a file"
+        print(f"{_name(exc)}: error: {what}", file=sys.stderr)
         return EXIT_USER
     except KeyboardInterrupt:
         print("mechcirc: interrupted", file=sys.stderr)

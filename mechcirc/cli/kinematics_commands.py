@@ -440,11 +440,10 @@ def cmd_linkage(args) -> int:
     state = lk.solve(theta)
     if args.plot:
         from ..kinematics.plots import plot_linkage
-        w1 = lk.cranks[0].omega
         # one turn of the first crank, started from the requested position
-        sweep = lk.solve(theta + np.sign(w1) * np.radians(np.arange(0.0, 361.0, 3.0)))
-        moving = [p for p in lk.pose if p not in lk.ground]
-        paths = {p: np.array([s.points[p] for s in sweep]) for p in moving}
+        turn = np.sign(lk.cranks[0].omega) * np.radians(np.arange(0.0, 361.0, 3.0))
+        sweep = lk.solve(theta + turn)
+        paths = {p: np.array([s.points[p] for s in sweep]) for p in lk.pose if p not in lk.ground}
         save_figure(plot_linkage(lk, state, paths), args.plot)
     groups = lk.assur_groups()
     doc = {"file": args.file, "name": lk.name, "units": lk.units or None,

@@ -90,10 +90,7 @@ def cmd_periodic(args) -> int:
         circuit, warns = load_with_warnings(args.file)
         motion = None
         warning_lines(warns)
-    elements = _elements(args, circuit)
-    if single:
-        return _one_speed(args, circuit, elements, motion)
-    return _speed_map(args, circuit, elements, motion)
+    return (_one_speed if single else _speed_map)(args, circuit, _elements(args, circuit), motion)
 
 
 def _scene(args):

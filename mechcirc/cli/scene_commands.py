@@ -91,7 +91,7 @@ def cmd_scene(args) -> int:
                           "--mode": (one, "one crank angle drawn into --plot, without --cycle "
                                      "or --reduce", "add --plot IMAGE"),
                           "--reduce": (not args.cycle, "one crank angle, not to --cycle", "")})
-    from ..scene import build_needed, load_scene
+    from ..scene import build, build_needed, load_scene
 
     scene = load_scene(args.file)
     if args.cycle:
@@ -100,12 +100,8 @@ def cmd_scene(args) -> int:
         raise MechcircError(f"{args.file}: --reduce needs band = [W1, W2] and tol = T in the "
                             "file's [analysis] table")
     theta_deg = scene_theta(args, scene, " or --cycle")
-    if args.reduce:
-        model, reduced = build_needed(scene, math.radians(theta_deg), reflect=args.reflect)
-    else:
-        from ..scene import build
-
-        model, reduced = build(scene, math.radians(theta_deg), reflect=args.reflect), None
+    model, reduced = build_needed(scene, math.radians(theta_deg), reflect=args.reflect) \
+        if args.reduce else (build(scene, math.radians(theta_deg), reflect=args.reflect), None)
     args.theta = theta_deg
     found = model.circuit.resonances()
     if args.mode is not None:
@@ -179,10 +175,9 @@ def _cycle(args, scene) -> int:
     print(f"{args.file}: scene {scene.name!r}, {len(cmap.theta)} crank angles, shaft "
           f"Ω = {in_unit(cmap.omega_shaft, u):g} {u}")
     sym = frequency_symbol(u)
-    head = "  θ [deg]  " + " ".join(f"{sym + '_r' + str(k + 1):>10}" for k in range(W.shape[1])) \
-        + "  " + " ".join(f"{'|Q0| h=' + str(h):>11}" for h in cmap.harmonics)
     print(f"resonances [{u}] and |Q0| [{unit}] at h·Ω:")
-    print(head)
+    print("  θ [deg]  " + " ".join(f"{sym + '_r' + str(k + 1):>10}" for k in range(W.shape[1]))
+          + "  " + " ".join(f"{'|Q0| h=' + str(h):>11}" for h in cmap.harmonics))
     for i, th in enumerate(cmap.theta):
         row = f"skipped: {cmap.skipped[i]}" if i in cmap.skipped else \
             " ".join(f"{w:10.5g}" for w in in_unit(W[i], u)) + "  " + \
