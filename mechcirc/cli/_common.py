@@ -387,6 +387,12 @@ MAX_OMEGA = 1e100
 MAX_LENGTH = 1e50
 
 
+def fields_of(obj, names: str) -> dict:
+    """``{name: obj.name}`` for each of the space-separated attribute ``names``, in order
+    (a record of ``--json``)."""
+    return {name: getattr(obj, name) for name in names.split()}
+
+
 def _jsonable(obj):
     if isinstance(obj, float):
         return obj

@@ -18,7 +18,7 @@ from ..limits import (
 from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (NETLIST_FILE, Default, add_command, add_handler, add_method_option,
                       add_output_option, add_plot_option, add_unit_option, check_names,
-                      check_output_paths, frequency_text, load_with_warnings, positive_omega,
+                      check_output_paths, fields_of, frequency_text, load_with_warnings, positive_omega,
                       print_json, print_written, real, refuse_ignored, save_figure, warning_lines)
 
 #: argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``); the
@@ -125,17 +125,13 @@ def _tree_and_unloaded(circuit) -> tuple[str, tuple[str, ...]]:
 
 def cmd_check(args) -> int:
     circuit, warns = load_with_warnings(args.file)
-    elements = [
-        {"name": e.name, "kind": e.kind, "n1": e.n1, "n2": e.n2, "value": e.value,
-         "eta": e.eta, "line": e.line} for e in circuit.elements]
-    levers = [{"name": lv.name, "p1": lv.p1, "p2": lv.p2, "s1": lv.s1, "s2": lv.s2,
-               "ratio": lv.ratio, "line": lv.line} for lv in circuit.levers]
+    elements = [fields_of(e, "name kind n1 n2 value eta line") for e in circuit.elements]
+    levers = [fields_of(lv, "name p1 p2 s1 s2 ratio line") for lv in circuit.levers]
     d = circuit.drive
     tree, unloaded = _tree_and_unloaded(circuit)
     doc = {
         "file": args.file, "name": circuit.name,
-        "drive": {"name": d.name, "n1": d.n1, "n2": d.n2, "kind": d.kind,
-                  "amplitude": d.amplitude,
+        "drive": {**fields_of(d, "name n1 n2 kind amplitude"),
                   **({"motion": d.motion.spec} if d.motion is not None else {})},
         "nodes": circuit.nodes, "elements": elements, "levers": levers,
         "unloaded": list(unloaded), "warnings": warns, "tree": tree,

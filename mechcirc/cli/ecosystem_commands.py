@@ -8,7 +8,7 @@ from ..errors import MechcircError, did_you_mean
 from ..limits import FORMULA_SECONDS
 from ._common import (NETLIST_FILE, Default, add_command, add_handler, add_method_option,
                       add_output_option, add_plot_option, add_unit_option, band_omega,
-                      check_output_paths, count, frequency_text, load_with_warnings,
+                      check_output_paths, count, fields_of, frequency_text, load_with_warnings,
                       positive_omega, print_json, print_written, real, refuse_ignored,
                       save_figure, time_limit, warning_lines)
 
@@ -125,10 +125,8 @@ def cmd_forces(args) -> int:
         return print_json({
             "file": args.file, "name": circuit.name, "omega": args.omega, "K": K, "Q0": Q0,
             "flag": flag,
-            "elements": [{"name": r.name, "kind": r.kind, "n1": r.n1, "n2": r.n2,
-                          "Q": r.Q, "Q_abs": r.Q_abs, "Q_phase_deg": r.Q_phase_deg,
-                          "v": r.v, "v_abs": r.v_abs, "v_phase_deg": r.v_phase_deg,
-                          "share": r.share} for r in rows]})
+            "elements": [fields_of(r, "name kind n1 n2 Q Q_abs Q_phase_deg v v_abs v_phase_deg "
+                                      "share") for r in rows]})
     u = units_of(circuit.drive)
     print(f"{args.file}: {frequency_text(args.omega, args.unit)}, K = {K.real:.6g}{K.imag:+.6g}j {u['K']}, |Q0| = {abs(Q0):.6g} {u['Q']}")
     if flag:
