@@ -94,15 +94,12 @@ def run_handler(args) -> int:
     with warnings.catch_warnings(record=True) as caught:
         status = _run(args)
     for w in caught:
-        if status == EXIT_USER and issubclass(w.category, RuntimeWarning):
-            continue
         if issubclass(w.category, MechcircWarning):
             # The package's own warnings read as the command's: one "warning:" line
             # each, and not again when the command already printed that message.
-            if str(w.message) not in _SHOWN:
-                warning_lines([str(w.message)])
-            continue
-        warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+            warning_lines([str(w.message)])
+        elif status != EXIT_USER or not issubclass(w.category, RuntimeWarning):
+            warnings.showwarning(w.message, w.category, w.filename, w.lineno)
     return status
 
 
