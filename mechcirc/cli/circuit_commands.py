@@ -257,9 +257,8 @@ def cmd_sweep(args) -> int:
         except SolverError as exc:      # too large for the eigenproblem: sweep anyway
             warns.append(f"resonance markers left out: {exc}")
     found = [r for r in everything or () if omega[0] <= r.omega <= omega[-1]]
-    sens = None
-    if args.sensitivity:            # (imported above, where the names were checked)
-        sens = sweep_sensitivity(circuit, result.omega, args.sensitivity)
+    # (sweep_sensitivity imported above, where the names were checked)
+    sens = sweep_sensitivity(circuit, result.omega, args.sensitivity) if args.sensitivity else None
     from .._sweep import FLAG_SINGULAR, PEAK_RESONANCE_LIMIT, peak
 
     pk = peak(result, resonances=everything if len(circuit.elements) <= PEAK_RESONANCE_LIMIT
@@ -445,7 +444,7 @@ def cmd_resonances(args) -> int:
         [m.resonance for m in modes]
     warning_lines(warns)
     if args.plot and modes is not None:     # --plot found the modes above
-        _plot_modes(args, circuit, modes, warns)
+        _plot_modes(args, circuit, modes)
     if args.json:
         return _print_resonances_json(args, circuit, found, modes)
     print(f"{args.file}: {sum(r.kind == 'resonance' for r in found)} resonances (K = 0), "
@@ -469,14 +468,13 @@ def cmd_resonances(args) -> int:
     return 0
 
 
-def _plot_modes(args, circuit, modes, warns: list) -> None:
+def _plot_modes(args, circuit, modes) -> None:
     """``resonances --plot``: the lowest :data:`MAX_MODE_PANELS` mode shapes, one panel each."""
     from ..plotting import plot_modes
 
     if len(modes) > MAX_MODE_PANELS:
-        warns.append(f"--plot draws the lowest {MAX_MODE_PANELS} of {len(modes)} modes "
-                     "(give --omega-max for fewer)")
-        warning_lines(warns[-1:])
+        warning_lines([f"--plot draws the lowest {MAX_MODE_PANELS} of {len(modes)} modes "
+                       "(give --omega-max for fewer)"])
     save_figure(plot_modes(modes[:MAX_MODE_PANELS], circuit.name, unit=args.unit), args.plot)
 
 
