@@ -757,8 +757,7 @@ def check_names(names, known, kind: str = "element", option: str = "--element") 
         :data:`SHOWN_NAMES` of the known names.
     """
     known = list(known)
-    bad = [n for n in names or () if n not in known]
-    if bad:
+    if bad := [n for n in names or () if n not in known]:
         more = f", ... ({len(known)} in all)" if len(known) > SHOWN_NAMES else ""
         raise MechcircError(f"unknown {kind} {bad[0]!r}{did_you_mean(bad[0], known)} "
                             f"(given to {option}; the netlist has "

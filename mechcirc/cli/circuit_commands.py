@@ -18,8 +18,9 @@ from ..limits import (
 from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (NETLIST_FILE, Default, add_command, add_handler, add_method_option,
                       add_output_option, add_plot_option, add_unit_option, check_names,
-                      check_output_paths, fields_of, frequency_text, load_with_warnings, positive_omega,
-                      print_json, print_written, real, refuse_ignored, save_figure, warning_lines)
+                      check_output_paths, fields_of, frequency_text, load_with_warnings,
+                      positive_omega, print_json, print_written, real, refuse_ignored,
+                      save_figure, warning_lines)
 
 #: argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``); the
 #: command checks the range (a sweep's --omega-min/--omega-max together).
@@ -374,8 +375,7 @@ def _print_sweep(args, result, extra, sens, pk, notes, dropped) -> None:
     print(f"  {_peak_text(pk, units, unit)}")
     if sens is not None:
         _print_sweep_sensitivity(sens, result)
-    n_flag = int(np.count_nonzero(result.flags))
-    if n_flag:
+    if n_flag := int(np.count_nonzero(result.flags)):
         print(f"  {n_flag} point(s) on or within rounding of a pole or zero of K "
               "(flagged; see the 'flag' column)")
     print_written(("CSV", args.output), ("plot", args.plot), ("Touchstone", args.touchstone),

@@ -152,8 +152,7 @@ def _one_speed(args, circuit, elements, motion) -> int:
     if r.harmonics > top.size:
         print(f"  (the {top.size} largest of {r.harmonics} harmonics; --json lists all)")
     for name in elements:
-        f = r.forces.get(name)
-        if f is not None:
+        if (f := r.forces.get(name)) is not None:
             print(f"  element {name}: peak |force| {np.max(np.abs(f)):.6g} {unit}")
     print_written(("CSV", args.output), ("plot", args.plot), notes=r.notes)
     return 0

@@ -183,8 +183,7 @@ def _cycle(args, scene) -> int:
             " ".join(f"{w:10.5g}" for w in in_unit(W[i], u)) + "  " + \
             " ".join(f"{abs(q):11.4g}" for q in cmap.Q0[i])
         print(f"  {math.degrees(th):7.2f}  {row}")
-    cross = cmap.crossings()
-    if cross:
+    if cross := cmap.crossings():
         print("a resonance meets a shaft harmonic at:")
         for c in cross:
             print(f"  θ ≈ {c['theta_deg']:7.2f}°: resonance {c['mode'] + 1} = "
@@ -270,8 +269,7 @@ def _cam_contact(scene, result) -> dict | None:
 
     if not getattr(scene.linkage, "contact", ""):
         return None
-    flew = flight(scene, result)
-    if flew:
+    if flew := flight(scene, result):
         return {"flight": flew}
     rep = contact_report(scene, result)
     L = scene.length_scale

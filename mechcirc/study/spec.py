@@ -343,8 +343,7 @@ def _read_netlist(data: dict, base: Path) -> tuple[str, Path]:
     except NetlistError as exc:
         _fail(("netlist",), f"netlist {str(path)!r}: {exc.message}")
     for lineno, line in enumerate(split_lines(text), 1):
-        words = re.split(r"[#;]", line, maxsplit=1)[0].split()
-        if words:
+        if words := re.split(r"[#;]", line, maxsplit=1)[0].split():
             if words[0].lower() not in SYNTAX and not words[0].startswith("*"):
                 _fail(("netlist",), f"netlist {str(path)!r} is not a netlist: its first "
                                     f"statement (line {lineno}) does not begin with one of "
