@@ -128,11 +128,9 @@ def _one_speed(args, circuit, elements, motion) -> int:
           f"(Ω = {in_unit(r.omega_shaft, fu):.6g} {fu})")
     print(f"  {r.harmonics} harmonics; estimated error {r.error:.2g} of the peak "
           f"(asked {r.tol:g})")
-    if r.unbounded:
-        print("  peak |Q| = inf: the steady periodic force is unbounded")
-    else:
-        print(f"  peak |Q| = {r.peak:.7g} {unit} at θ = {r.peak_angle_deg:.4f} deg; "
-              f"drive velocity up to {np.max(np.abs(r.v)):.4g} {vu}")
+    print("  peak |Q| = inf: the steady periodic force is unbounded" if r.unbounded else
+          f"  peak |Q| = {r.peak:.7g} {unit} at θ = {r.peak_angle_deg:.4f} deg; "
+          f"drive velocity up to {np.max(np.abs(r.v)):.4g} {vu}")
     near = np.flatnonzero(r.near)
     if near.size:
         print(f"  harmonics within {args.near:.0%} of a resonance:")
