@@ -116,12 +116,10 @@ def warning_lines(messages) -> None:
     messages : iterable of str
         The warnings' texts.
     """
-    for text in messages:
-        text = str(text)
-        if text in _SHOWN:
-            continue
-        _SHOWN.add(text)
-        print(f"warning: {text}", file=sys.stderr)
+    for text in map(str, messages):
+        if text not in _SHOWN:
+            _SHOWN.add(text)
+            print(f"warning: {text}", file=sys.stderr)
 
 
 def _run(args) -> int:
@@ -412,8 +410,7 @@ def _longest_list(obj, depth: int = 0) -> int:
     if isinstance(obj, dict):
         return max((_longest_list(v, depth + 1) for v in obj.values()), default=0)
     if isinstance(obj, list):
-        inner = max((_longest_list(v, depth + 1) for v in obj[:3]), default=0)
-        return max(len(obj), inner)
+        return max([len(obj), *(_longest_list(v, depth + 1) for v in obj[:3])])
     return 0
 
 
