@@ -132,9 +132,8 @@ def cmd_forces(args) -> int:
     if flag:
         print("  this omega is on or within rounding of a pole or zero of K (flagged)")
     width = max([len(r.name) for r in rows] + [7])
-    q_head, v_head = f"|Q| [{u['Q']}]", f"|v| [{u['v']}]"
-    print(f"  {'element':<{width}} {'kind':<6} {q_head:>12} {'arg Q [deg]':>11} "
-          f"{'|Q|/|Q0|':>9} {v_head:>12} {'arg v [deg]':>11}")
+    print(f"  {'element':<{width}} {'kind':<6} {'|Q| [' + u['Q'] + ']':>12} {'arg Q [deg]':>11} "
+          f"{'|Q|/|Q0|':>9} {'|v| [' + u['v'] + ']':>12} {'arg v [deg]':>11}")
     for r in rows:
         print(f"  {r.name:<{width}} {r.kind:<6} {r.Q_abs:>12.5g} {_deg(r.Q_phase_deg):>11.2f} "
               f"{r.share:>9.4f} {r.v_abs:>12.5g} {_deg(r.v_phase_deg):>11.2f}")
