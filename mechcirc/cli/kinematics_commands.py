@@ -256,11 +256,9 @@ def cmd_fourbar(args) -> int:
               + "; μ and ν grow without bound at the ends, where it locks")
     if "dead_centres" in doc:
         for dc in doc["dead_centres"]:
-            line = (f"  {dc['kind']:5s} dead centre: θ = {dc['theta_deg']:8.3f}°  "
-                    f"φ4 = {dc['phi4_deg']:8.3f}°  ν = {dc['nu']:+.6f} 1/rad")
-            if args.omega is not None:
-                line += f"  ε4 = {dc['rocker_acceleration']:+.1f} rad/s²"
-            print(line)
+            print(f"  {dc['kind']:5s} dead centre: θ = {dc['theta_deg']:8.3f}°  "
+                  f"φ4 = {dc['phi4_deg']:8.3f}°  ν = {dc['nu']:+.6f} 1/rad"
+                  + ("" if args.omega is None else f"  ε4 = {dc['rocker_acceleration']:+.1f} rad/s²"))
         print(f"  swing Ψ = {doc['swing_deg']:.4f}°")
     tmin = ", ".join(f"{t:.2f}°" for t in doc["theta_at_gamma_min_deg"])
     tmax = ", ".join(f"{t:.2f}°" for t in doc["theta_at_gamma_max_deg"])

@@ -171,9 +171,8 @@ def _table(result, paper_applies: bool = True) -> str:
     variant = int(p.label.split()[-1]) if p.label.split()[-1:] and \
         p.label.split()[-1].isdigit() else None
     paper = PAPER.get(p.drive, {}).get(variant, {}) if paper_applies and variant else {}
-    speed = f"{result.wall_time * 1e3:.1f} ms"
-    if result.compile_time:
-        speed += f" + {result.compile_time:.2f} s compile/cache load"
+    speed = f"{result.wall_time * 1e3:.1f} ms" + (
+        f" + {result.compile_time:.2f} s compile/cache load" if result.compile_time else "")
     lines = [f"{p.label or p.drive}: revolution {result.revolution}, alpha = "
              f"{result.alpha_deg:g} deg, method {result.method} ({result.backend}), {speed}",
              f"{'quantity':<9} {'unit':<7} {'min':>10} {'max':>10}   {'paper min':>10} "
