@@ -99,12 +99,11 @@ def _scene(args):
     from ..scene.cycle import drive_motion
 
     scene = load_scene(args.file)
-    theta_deg = scene_theta(args, scene)
+    theta = math.radians(scene_theta(args, scene))
     if scene.drive.kind != "velocity":
         raise MechcircError(f"{args.file}: the drive is a force; the periodic drive imposes "
                             "the linkage's motion, which needs a velocity drive")
-    model = build(scene, math.radians(theta_deg))
-    return model.circuit, drive_motion(scene, math.radians(theta_deg))
+    return build(scene, theta).circuit, drive_motion(scene, theta)
 
 
 def _one_speed(args, circuit, elements, motion) -> int:
