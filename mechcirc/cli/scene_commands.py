@@ -191,9 +191,8 @@ def _cycle(args, scene) -> int:
     else:
         print("no resonance meets a harmonic h·Ω (h ≤ "
               f"{cmap.harmonics[-1]}) over the cycle")
-    for path in (args.output, args.plot):
-        if path:
-            print(f"wrote {path}")
+    for path in filter(None, (args.output, args.plot)):
+        print(f"wrote {path}")
     return 0
 
 
