@@ -546,11 +546,9 @@ def write_outputs(args, columns, plot=None, comment: str | None = None,
     with OutputSet() as out:
         if args.output:
             with open(out.path(args.output), "w", encoding="utf-8", newline="") as fh:
-                if comment:
-                    fh.write(comment + "\n")
                 names, cols = zip(*columns)
-                np.savetxt(fh, np.column_stack(cols), delimiter=",", fmt=fmt,
-                           header=",".join(names), comments="")
+                np.savetxt(fh, np.column_stack(cols), delimiter=",", fmt=fmt, comments="",
+                           header=(comment + "\n" if comment else "") + ",".join(names))
         if plot is not None and args.plot:
             save_figure(plot(), args.plot, out.path(args.plot))
 
