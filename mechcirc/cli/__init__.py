@@ -19,7 +19,7 @@ import signal
 import sys
 import threading
 
-from ..errors import shorten
+from ..errors import did_you_mean, shorten
 
 __all__ = ["main", "build_parser", "one_blas_thread"]
 
@@ -62,18 +62,14 @@ class _Parser(argparse.ArgumentParser):
         return super().parse_known_args(args, namespace)
 
     def error(self, message):
-        from ..sources import did_you_mean
-
         # 'invalid choice: 'swep' (choose from 'check', 'sweep', ...)': name the nearest
-        m = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
-        if m:
+        if m := re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message):
             hint = did_you_mean(m.group(1), re.findall(r"'([^']*)'", m.group(2)))
             message = message.replace(m.group(0), m.group(0) + hint)
-        m = re.search(r"unrecognized arguments: (--[\w-]+)", message)
-        if m:
+        if m := re.search(r"unrecognized arguments: (--[\w-]+)", message):
             message += self._option_hint(m.group(1).split("=")[0])
-        m = re.search(r"unrecognized arguments: ([^-\s]\S*)", message)
-        if m:                           # a bare word: a value of which option?
+        # a bare word: a value of which option?
+        if m := re.search(r"unrecognized arguments: ([^-\s]\S*)", message):
             message += self._value_hint(m.group(1))
         if message.startswith("the following arguments are required"):
             # argparse names what is missing before what it did not know: a misspelt
@@ -93,14 +89,11 @@ class _Parser(argparse.ArgumentParser):
     def _option_hint(self, word: str) -> str:
         """The nearest option of the command given, or which commands take ``word`` when
         it is another command's option (any command's nearest when none was given)."""
-        from ..sources import did_you_mean
-
         subs = {name: p for action in self._actions
                 if isinstance(action, argparse._SubParsersAction)
                 for name, p in action.choices.items()}
         owners = [name for name, p in subs.items() if word in p._option_string_actions]
-        renamed = RENAMED.get((self.given or "", word))
-        if renamed:
+        if renamed := RENAMED.get((self.given or "", word)):
             return f"; {word} was renamed {renamed}"
         if self.given not in subs:
             options = set(self._option_string_actions).union(
@@ -115,14 +108,11 @@ class _Parser(argparse.ArgumentParser):
     def _value_hint(self, word: str) -> str:
         """``"; did you mean '--load medium'?"`` when ``word`` is near a choice of an option
         of the command given (``mechcirc synth medum``)."""
-        from ..sources import did_you_mean
-
         for action in self._actions:
             if isinstance(action, argparse._SubParsersAction) and self.given in action.choices:
                 for opt in action.choices[self.given]._actions:
                     if opt.option_strings and opt.choices:      # (a sub-parser has none)
-                        hint = did_you_mean(word, opt.choices)
-                        if hint:
+                        if hint := did_you_mean(word, opt.choices):
                             return hint.replace("'", f"'{opt.option_strings[-1]} ", 1)
         return ""
 

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import (MAX_QUOTED, InputError, MechcircError, MechcircWarning, NetlistError,
-                      NotSeriesParallelError, clip, shorten)
+                      NotSeriesParallelError, clip, did_you_mean, shorten)
 from ..units import (FREQUENCY_UNITS, UnitError, in_unit, in_unit_of, is_bare_number,
                      parse_quantity, parse_unit)
 
@@ -94,15 +94,12 @@ def run_handler(args) -> int:
     with warnings.catch_warnings(record=True) as caught:
         status = _run(args)
     for w in caught:
-        if status == EXIT_USER and issubclass(w.category, RuntimeWarning):
-            continue
         if issubclass(w.category, MechcircWarning):
             # The package's own warnings read as the command's: one "warning:" line
             # each, and not again when the command already printed that message.
-            if str(w.message) not in _SHOWN:
-                warning_lines([str(w.message)])
-            continue
-        warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+            warning_lines([str(w.message)])
+        elif status != EXIT_USER or not issubclass(w.category, RuntimeWarning):
+            warnings.showwarning(w.message, w.category, w.filename, w.lineno)
     return status
 
 
@@ -119,12 +116,10 @@ def warning_lines(messages) -> None:
     messages : iterable of str
         The warnings' texts.
     """
-    for text in messages:
-        text = str(text)
-        if text in _SHOWN:
-            continue
-        _SHOWN.add(text)
-        print(f"warning: {text}", file=sys.stderr)
+    for text in map(str, messages):
+        if text not in _SHOWN:
+            _SHOWN.add(text)
+            print(f"warning: {text}", file=sys.stderr)
 
 
 def _run(args) -> int:
@@ -137,11 +132,10 @@ def _run(args) -> int:
         print(str(exc) if located else f"{where}: error: {exc}" if where
               else f"mechcirc: error: {exc}", file=sys.stderr)
         return EXIT_USER
-    except FileNotFoundError as exc:
-        print(f"{_name(exc)}: error: no such file", file=sys.stderr)
-        return EXIT_USER
-    except IsADirectoryError as exc:
-        print(f"{_name(exc)}: error: is a directory, expected a file", file=sys.stderr)
+    except (FileNotFoundError, IsADirectoryError) as exc:
+        what = "no such file" if isinstance(exc, FileNotFoundError) else \
+            "is a directory, expected a file"
+        print(f"{_name(exc)}: error: {what}", file=sys.stderr)
         return EXIT_USER
     except KeyboardInterrupt:
         print("mechcirc: interrupted", file=sys.stderr)
@@ -388,6 +382,12 @@ MAX_OMEGA = 1e100
 MAX_LENGTH = 1e50
 
 
+def fields_of(obj, names: str) -> dict:
+    """``{name: obj.name}`` for each of the space-separated attribute ``names``, in order
+    (a record of ``--json``)."""
+    return {name: getattr(obj, name) for name in names.split()}
+
+
 def _jsonable(obj):
     if isinstance(obj, float):
         return obj
@@ -410,8 +410,7 @@ def _longest_list(obj, depth: int = 0) -> int:
     if isinstance(obj, dict):
         return max((_longest_list(v, depth + 1) for v in obj.values()), default=0)
     if isinstance(obj, list):
-        inner = max((_longest_list(v, depth + 1) for v in obj[:3]), default=0)
-        return max(len(obj), inner)
+        return max([len(obj), *(_longest_list(v, depth + 1) for v in obj[:3])])
     return 0
 
 
@@ -547,11 +546,9 @@ def write_outputs(args, columns, plot=None, comment: str | None = None,
     with OutputSet() as out:
         if args.output:
             with open(out.path(args.output), "w", encoding="utf-8", newline="") as fh:
-                if comment:
-                    fh.write(comment + "\n")
                 names, cols = zip(*columns)
-                np.savetxt(fh, np.column_stack(cols), delimiter=",", fmt=fmt,
-                           header=",".join(names), comments="")
+                np.savetxt(fh, np.column_stack(cols), delimiter=",", fmt=fmt, comments="",
+                           header=(comment + "\n" if comment else "") + ",".join(names))
         if plot is not None and args.plot:
             save_figure(plot(), args.plot, out.path(args.plot))
 
@@ -665,8 +662,6 @@ def set_values(items, not_numbers: dict | None = None, texts: bool = False,
         A text without ``=``, a name of ``not_numbers`` or not of ``roles``, or a value
         that is not such a number (in its role's unit).
     """
-    from ..sources import did_you_mean
-
     out, words = {}, not_numbers or {}
     for item in items:
         name, sep, value = item.partition("=")
@@ -756,11 +751,8 @@ def check_names(names, known, kind: str = "element", option: str = "--element") 
         Naming the first unknown name, the nearest known one and at most
         :data:`SHOWN_NAMES` of the known names.
     """
-    from ..sources import did_you_mean
-
     known = list(known)
-    bad = [n for n in names or () if n not in known]
-    if bad:
+    if bad := [n for n in names or () if n not in known]:
         more = f", ... ({len(known)} in all)" if len(known) > SHOWN_NAMES else ""
         raise MechcircError(f"unknown {kind} {bad[0]!r}{did_you_mean(bad[0], known)} "
                             f"(given to {option}; the netlist has "

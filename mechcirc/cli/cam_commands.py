@@ -91,8 +91,7 @@ def _motion(args):
                 if math.isfinite(m.error) else " (periodic spline; under 9 rows: no error "
                 "estimate)")
         return m.scaled(scale), f"lift table {args.motion}{note}"
-    missing = [o for o in ("rise", "return", "stroke") if getattr(args, o) is None]
-    if missing:
+    if missing := [o for o in ("rise", "return", "stroke") if getattr(args, o) is None]:
         raise InputError(f"--law {args.law} needs --{missing[0]} (a law cycle takes --rise, "
                          "--return and --stroke; --dwell defaults to 0)")
     dwell = args.dwell or 0.0

@@ -18,8 +18,9 @@ from ..limits import (
 from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (NETLIST_FILE, Default, add_command, add_handler, add_method_option,
                       add_output_option, add_plot_option, add_unit_option, check_names,
-                      check_output_paths, frequency_text, load_with_warnings, positive_omega,
-                      print_json, print_written, real, refuse_ignored, save_figure, warning_lines)
+                      check_output_paths, fields_of, frequency_text, load_with_warnings,
+                      positive_omega, print_json, print_written, real, refuse_ignored,
+                      save_figure, warning_lines)
 
 #: argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``); the
 #: command checks the range (a sweep's --omega-min/--omega-max together).
@@ -125,23 +126,19 @@ def _tree_and_unloaded(circuit) -> tuple[str, tuple[str, ...]]:
 
 def cmd_check(args) -> int:
     circuit, warns = load_with_warnings(args.file)
-    elements = [
-        {"name": e.name, "kind": e.kind, "n1": e.n1, "n2": e.n2, "value": e.value,
-         "eta": e.eta, "line": e.line} for e in circuit.elements]
-    levers = [{"name": lv.name, "p1": lv.p1, "p2": lv.p2, "s1": lv.s1, "s2": lv.s2,
-               "ratio": lv.ratio, "line": lv.line} for lv in circuit.levers]
+    elements = [fields_of(e, "name kind n1 n2 value eta line") for e in circuit.elements]
+    levers = [fields_of(lv, "name p1 p2 s1 s2 ratio line") for lv in circuit.levers]
     d = circuit.drive
     tree, unloaded = _tree_and_unloaded(circuit)
     doc = {
         "file": args.file, "name": circuit.name,
-        "drive": {"name": d.name, "n1": d.n1, "n2": d.n2, "kind": d.kind,
-                  "amplitude": d.amplitude,
+        "drive": {**fields_of(d, "name n1 n2 kind amplitude"),
                   **({"motion": d.motion.spec} if d.motion is not None else {})},
         "nodes": circuit.nodes, "elements": elements, "levers": levers,
         "unloaded": list(unloaded), "warnings": warns, "tree": tree,
     }
-    if getattr(args, "explain", False):
-        from ..explain import explain
+    if args.explain:
+        from ..explain import explain, explain_lines
 
         steps, root = explain(circuit)
         doc["steps"] = [dict(vars(s)) for s in steps]     # Step's fields: label, kind, ...
@@ -150,9 +147,7 @@ def cmd_check(args) -> int:
         return print_json(doc)
     print(f"{args.file}: {len(elements)} elements, {len(levers)} levers, "
           f"{len(circuit.nodes)} nodes")
-    if getattr(args, "explain", False):
-        from ..explain import explain_lines
-
+    if args.explain:
         warning_lines(warns)
         print("\n".join(explain_lines(circuit)))
         return 0
@@ -191,16 +186,15 @@ def _omega_grid(args):
         # One point would be --omega-min alone: the band and its peak need both ends.
         raise MechcircError(f"--points must be between 2 and {MAX_SWEEP_POINTS} (a sweep "
                             f"spans --omega-min to --omega-max), got {n}")
-    for wanted, limit, what in ((args.plot, MAX_PLOT_POINTS, "--plot"),
-                                (args.json, MAX_JSON_POINTS, "--json"),
-                                (args.method == "nodal", MAX_NODAL_POINTS, "--method nodal"),
-                                (getattr(args, "node", None), MAX_NODAL_POINTS, "--node")):
+    larger = "write larger sweeps with -o CSV"
+    for wanted, limit, what, why in (
+            (args.plot, MAX_PLOT_POINTS, "--plot", larger),
+            (args.json, MAX_JSON_POINTS, "--json", larger),
+            (args.method == "nodal", MAX_NODAL_POINTS, "--method nodal", larger),
+            (args.node, MAX_NODAL_POINTS, "--node", larger),
+            (args.sensitivity, MAX_NODAL_POINTS, "--sensitivity", "a nodal solve at each")):
         if wanted and n > limit:
-            raise MechcircError(f"--points {n} with {what}: the limit is {limit} points "
-                                "(write larger sweeps with -o CSV)")
-    if args.sensitivity and n > MAX_NODAL_POINTS:
-        raise MechcircError(f"--points {n} with --sensitivity: the limit is "
-                            f"{MAX_NODAL_POINTS} points (a nodal solve at each)")
+            raise MechcircError(f"--points {n} with {what}: the limit is {limit} points ({why})")
     if args.log:
         if lo <= 0:
             raise MechcircError("--log needs --omega-min > 0")
@@ -264,9 +258,8 @@ def cmd_sweep(args) -> int:
         except SolverError as exc:      # too large for the eigenproblem: sweep anyway
             warns.append(f"resonance markers left out: {exc}")
     found = [r for r in everything or () if omega[0] <= r.omega <= omega[-1]]
-    sens = None
-    if args.sensitivity:            # (imported above, where the names were checked)
-        sens = sweep_sensitivity(circuit, result.omega, args.sensitivity)
+    # (sweep_sensitivity imported above, where the names were checked)
+    sens = sweep_sensitivity(circuit, result.omega, args.sensitivity) if args.sensitivity else None
     from .._sweep import FLAG_SINGULAR, PEAK_RESONANCE_LIMIT, peak
 
     pk = peak(result, resonances=everything if len(circuit.elements) <= PEAK_RESONANCE_LIMIT
@@ -382,8 +375,7 @@ def _print_sweep(args, result, extra, sens, pk, notes, dropped) -> None:
     print(f"  {_peak_text(pk, units, unit)}")
     if sens is not None:
         _print_sweep_sensitivity(sens, result)
-    n_flag = int(np.count_nonzero(result.flags))
-    if n_flag:
+    if n_flag := int(np.count_nonzero(result.flags)):
         print(f"  {n_flag} point(s) on or within rounding of a pole or zero of K "
               "(flagged; see the 'flag' column)")
     print_written(("CSV", args.output), ("plot", args.plot), ("Touchstone", args.touchstone),
@@ -397,11 +389,8 @@ def _sensitivity_columns(sens) -> dict:
     if sens is None:
         return {}
     q = sens.quantity
-    out = {}
-    for name in sens.dK:
-        out[f"d{q}_d{name}"] = sens.derivative(name)
-        out[f"rel{q}_{name}"] = sens.relative(name)
-    return out
+    return {column: values for name in sens.dK for column, values in (
+        (f"d{q}_d{name}", sens.derivative(name)), (f"rel{q}_{name}", sens.relative(name)))}
 
 
 def _print_sweep_sensitivity(sens, result) -> None:
@@ -455,7 +444,7 @@ def cmd_resonances(args) -> int:
         [m.resonance for m in modes]
     warning_lines(warns)
     if args.plot and modes is not None:     # --plot found the modes above
-        _plot_modes(args, circuit, modes, warns)
+        _plot_modes(args, circuit, modes)
     if args.json:
         return _print_resonances_json(args, circuit, found, modes)
     print(f"{args.file}: {sum(r.kind == 'resonance' for r in found)} resonances (K = 0), "
@@ -479,14 +468,13 @@ def cmd_resonances(args) -> int:
     return 0
 
 
-def _plot_modes(args, circuit, modes, warns: list) -> None:
+def _plot_modes(args, circuit, modes) -> None:
     """``resonances --plot``: the lowest :data:`MAX_MODE_PANELS` mode shapes, one panel each."""
     from ..plotting import plot_modes
 
     if len(modes) > MAX_MODE_PANELS:
-        warns.append(f"--plot draws the lowest {MAX_MODE_PANELS} of {len(modes)} modes "
-                     "(give --omega-max for fewer)")
-        warning_lines(warns[-1:])
+        warning_lines([f"--plot draws the lowest {MAX_MODE_PANELS} of {len(modes)} modes "
+                       "(give --omega-max for fewer)"])
     save_figure(plot_modes(modes[:MAX_MODE_PANELS], circuit.name, unit=args.unit), args.plot)
 
 

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..errors import MechcircError
+from ..errors import MechcircError, did_you_mean
 from ..limits import FORMULA_SECONDS
 from ._common import (NETLIST_FILE, Default, add_command, add_handler, add_method_option,
                       add_output_option, add_plot_option, add_unit_option, band_omega,
-                      check_output_paths, count, frequency_text, load_with_warnings,
+                      check_output_paths, count, fields_of, frequency_text, load_with_warnings,
                       positive_omega, print_json, print_written, real, refuse_ignored,
                       save_figure, time_limit, warning_lines)
 
@@ -125,18 +125,15 @@ def cmd_forces(args) -> int:
         return print_json({
             "file": args.file, "name": circuit.name, "omega": args.omega, "K": K, "Q0": Q0,
             "flag": flag,
-            "elements": [{"name": r.name, "kind": r.kind, "n1": r.n1, "n2": r.n2,
-                          "Q": r.Q, "Q_abs": r.Q_abs, "Q_phase_deg": r.Q_phase_deg,
-                          "v": r.v, "v_abs": r.v_abs, "v_phase_deg": r.v_phase_deg,
-                          "share": r.share} for r in rows]})
+            "elements": [fields_of(r, "name kind n1 n2 Q Q_abs Q_phase_deg v v_abs v_phase_deg "
+                                      "share") for r in rows]})
     u = units_of(circuit.drive)
     print(f"{args.file}: {frequency_text(args.omega, args.unit)}, K = {K.real:.6g}{K.imag:+.6g}j {u['K']}, |Q0| = {abs(Q0):.6g} {u['Q']}")
     if flag:
         print("  this omega is on or within rounding of a pole or zero of K (flagged)")
     width = max([len(r.name) for r in rows] + [7])
-    q_head, v_head = f"|Q| [{u['Q']}]", f"|v| [{u['v']}]"
-    print(f"  {'element':<{width}} {'kind':<6} {q_head:>12} {'arg Q [deg]':>11} "
-          f"{'|Q|/|Q0|':>9} {v_head:>12} {'arg v [deg]':>11}")
+    print(f"  {'element':<{width}} {'kind':<6} {'|Q| [' + u['Q'] + ']':>12} {'arg Q [deg]':>11} "
+          f"{'|Q|/|Q0|':>9} {'|v| [' + u['v'] + ']':>12} {'arg v [deg]':>11}")
     for r in rows:
         print(f"  {r.name:<{width}} {r.kind:<6} {r.Q_abs:>12.5g} {_deg(r.Q_phase_deg):>11.2f} "
               f"{r.share:>9.4f} {r.v_abs:>12.5g} {_deg(r.v_phase_deg):>11.2f}")
@@ -207,8 +204,6 @@ def cmd_formula(args) -> int:
 def _plot_column(args, spec) -> str:
     """The result column ``--plot`` draws: ``--plot-column`` (checked, with did-you-mean;
     refused without ``--plot``) or the analysis's default."""
-    from ..sources import did_you_mean
-
     column = args.plot_column or ("Q0_abs_max" if spec.analysis == "sweep" else "resonance_1")
     results = spec.columns[len(spec.params) + 3:]
     if args.plot and column not in results:

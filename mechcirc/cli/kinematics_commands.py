@@ -256,11 +256,9 @@ def cmd_fourbar(args) -> int:
               + "; μ and ν grow without bound at the ends, where it locks")
     if "dead_centres" in doc:
         for dc in doc["dead_centres"]:
-            line = (f"  {dc['kind']:5s} dead centre: θ = {dc['theta_deg']:8.3f}°  "
-                    f"φ4 = {dc['phi4_deg']:8.3f}°  ν = {dc['nu']:+.6f} 1/rad")
-            if args.omega is not None:
-                line += f"  ε4 = {dc['rocker_acceleration']:+.1f} rad/s²"
-            print(line)
+            print(f"  {dc['kind']:5s} dead centre: θ = {dc['theta_deg']:8.3f}°  "
+                  f"φ4 = {dc['phi4_deg']:8.3f}°  ν = {dc['nu']:+.6f} 1/rad"
+                  + ("" if args.omega is None else f"  ε4 = {dc['rocker_acceleration']:+.1f} rad/s²"))
         print(f"  swing Ψ = {doc['swing_deg']:.4f}°")
     tmin = ", ".join(f"{t:.2f}°" for t in doc["theta_at_gamma_min_deg"])
     tmax = ", ".join(f"{t:.2f}°" for t in doc["theta_at_gamma_max_deg"])
@@ -440,11 +438,10 @@ def cmd_linkage(args) -> int:
     state = lk.solve(theta)
     if args.plot:
         from ..kinematics.plots import plot_linkage
-        w1 = lk.cranks[0].omega
         # one turn of the first crank, started from the requested position
-        sweep = lk.solve(theta + np.sign(w1) * np.radians(np.arange(0.0, 361.0, 3.0)))
-        moving = [p for p in lk.pose if p not in lk.ground]
-        paths = {p: np.array([s.points[p] for s in sweep]) for p in moving}
+        turn = np.sign(lk.cranks[0].omega) * np.radians(np.arange(0.0, 361.0, 3.0))
+        sweep = lk.solve(theta + turn)
+        paths = {p: np.array([s.points[p] for s in sweep]) for p in lk.pose if p not in lk.ground}
         save_figure(plot_linkage(lk, state, paths), args.plot)
     groups = lk.assur_groups()
     doc = {"file": args.file, "name": lk.name, "units": lk.units or None,

@@ -90,10 +90,7 @@ def cmd_periodic(args) -> int:
         circuit, warns = load_with_warnings(args.file)
         motion = None
         warning_lines(warns)
-    elements = _elements(args, circuit)
-    if single:
-        return _one_speed(args, circuit, elements, motion)
-    return _speed_map(args, circuit, elements, motion)
+    return (_one_speed if single else _speed_map)(args, circuit, _elements(args, circuit), motion)
 
 
 def _scene(args):
@@ -102,12 +99,11 @@ def _scene(args):
     from ..scene.cycle import drive_motion
 
     scene = load_scene(args.file)
-    theta_deg = scene_theta(args, scene)
+    theta = math.radians(scene_theta(args, scene))
     if scene.drive.kind != "velocity":
         raise MechcircError(f"{args.file}: the drive is a force; the periodic drive imposes "
                             "the linkage's motion, which needs a velocity drive")
-    model = build(scene, math.radians(theta_deg))
-    return model.circuit, drive_motion(scene, math.radians(theta_deg))
+    return build(scene, theta).circuit, drive_motion(scene, theta)
 
 
 def _one_speed(args, circuit, elements, motion) -> int:
@@ -131,11 +127,9 @@ def _one_speed(args, circuit, elements, motion) -> int:
           f"(Ω = {in_unit(r.omega_shaft, fu):.6g} {fu})")
     print(f"  {r.harmonics} harmonics; estimated error {r.error:.2g} of the peak "
           f"(asked {r.tol:g})")
-    if r.unbounded:
-        print("  peak |Q| = inf: the steady periodic force is unbounded")
-    else:
-        print(f"  peak |Q| = {r.peak:.7g} {unit} at θ = {r.peak_angle_deg:.4f} deg; "
-              f"drive velocity up to {np.max(np.abs(r.v)):.4g} {vu}")
+    print("  peak |Q| = inf: the steady periodic force is unbounded" if r.unbounded else
+          f"  peak |Q| = {r.peak:.7g} {unit} at θ = {r.peak_angle_deg:.4f} deg; "
+          f"drive velocity up to {np.max(np.abs(r.v)):.4g} {vu}")
     near = np.flatnonzero(r.near)
     if near.size:
         print(f"  harmonics within {args.near:.0%} of a resonance:")
@@ -155,8 +149,7 @@ def _one_speed(args, circuit, elements, motion) -> int:
     if r.harmonics > top.size:
         print(f"  (the {top.size} largest of {r.harmonics} harmonics; --json lists all)")
     for name in elements:
-        f = r.forces.get(name)
-        if f is not None:
+        if (f := r.forces.get(name)) is not None:
             print(f"  element {name}: peak |force| {np.max(np.abs(f)):.6g} {unit}")
     print_written(("CSV", args.output), ("plot", args.plot), notes=r.notes)
     return 0

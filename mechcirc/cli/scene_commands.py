@@ -7,6 +7,7 @@ import warnings
 
 from ..errors import MechcircError
 from ..limits import MAX_CYCLE_POINTS
+from ..progress import Progress
 from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (NETLIST_FILE, Default, add_command, add_handler, add_output_option,
                       add_plot_option, add_unit_option, check_output_paths, count, crank_angle,
@@ -90,7 +91,7 @@ def cmd_scene(args) -> int:
                           "--mode": (one, "one crank angle drawn into --plot, without --cycle "
                                      "or --reduce", "add --plot IMAGE"),
                           "--reduce": (not args.cycle, "one crank angle, not to --cycle", "")})
-    from ..scene import build_needed, load_scene
+    from ..scene import build, build_needed, load_scene
 
     scene = load_scene(args.file)
     if args.cycle:
@@ -99,12 +100,8 @@ def cmd_scene(args) -> int:
         raise MechcircError(f"{args.file}: --reduce needs band = [W1, W2] and tol = T in the "
                             "file's [analysis] table")
     theta_deg = scene_theta(args, scene, " or --cycle")
-    if args.reduce:
-        model, reduced = build_needed(scene, math.radians(theta_deg), reflect=args.reflect)
-    else:
-        from ..scene import build
-
-        model, reduced = build(scene, math.radians(theta_deg), reflect=args.reflect), None
+    model, reduced = build_needed(scene, math.radians(theta_deg), reflect=args.reflect) \
+        if args.reduce else (build(scene, math.radians(theta_deg), reflect=args.reflect), None)
     args.theta = theta_deg
     found = model.circuit.resonances()
     if args.mode is not None:
@@ -161,8 +158,6 @@ def _cycle(args, scene) -> int:
 
     from ..scene.cycle import cycle_map, plot_cycle
 
-    from ..progress import Progress
-
     with Progress(args.points, "crank angles") as bar:
         cmap = cycle_map(scene, points=args.points, harmonics=args.harmonics,
                          reflect=args.reflect, progress=bar)
@@ -180,17 +175,15 @@ def _cycle(args, scene) -> int:
     print(f"{args.file}: scene {scene.name!r}, {len(cmap.theta)} crank angles, shaft "
           f"Ω = {in_unit(cmap.omega_shaft, u):g} {u}")
     sym = frequency_symbol(u)
-    head = "  θ [deg]  " + " ".join(f"{sym + '_r' + str(k + 1):>10}" for k in range(W.shape[1])) \
-        + "  " + " ".join(f"{'|Q0| h=' + str(h):>11}" for h in cmap.harmonics)
     print(f"resonances [{u}] and |Q0| [{unit}] at h·Ω:")
-    print(head)
+    print("  θ [deg]  " + " ".join(f"{sym + '_r' + str(k + 1):>10}" for k in range(W.shape[1]))
+          + "  " + " ".join(f"{'|Q0| h=' + str(h):>11}" for h in cmap.harmonics))
     for i, th in enumerate(cmap.theta):
         row = f"skipped: {cmap.skipped[i]}" if i in cmap.skipped else \
             " ".join(f"{w:10.5g}" for w in in_unit(W[i], u)) + "  " + \
             " ".join(f"{abs(q):11.4g}" for q in cmap.Q0[i])
         print(f"  {math.degrees(th):7.2f}  {row}")
-    cross = cmap.crossings()
-    if cross:
+    if cross := cmap.crossings():
         print("a resonance meets a shaft harmonic at:")
         for c in cross:
             print(f"  θ ≈ {c['theta_deg']:7.2f}°: resonance {c['mode'] + 1} = "
@@ -198,9 +191,8 @@ def _cycle(args, scene) -> int:
     else:
         print("no resonance meets a harmonic h·Ω (h ≤ "
               f"{cmap.harmonics[-1]}) over the cycle")
-    for path in (args.output, args.plot):
-        if path:
-            print(f"wrote {path}")
+    for path in filter(None, (args.output, args.plot)):
+        print(f"wrote {path}")
     return 0
 
 
@@ -276,8 +268,7 @@ def _cam_contact(scene, result) -> dict | None:
 
     if not getattr(scene.linkage, "contact", ""):
         return None
-    flew = flight(scene, result)
-    if flew:
+    if flew := flight(scene, result):
         return {"flight": flew}
     rep = contact_report(scene, result)
     L = scene.length_scale
@@ -310,7 +301,6 @@ def _print_contact(c: dict) -> None:
 def _simulate_with_bar(args, scene):
     """:func:`simulate_scene` as the options say, with a progress bar on a terminal; the
     accuracy warnings stay in the result's notes."""
-    from ..progress import Progress
     from ..scene.simulation import SceneAccuracyWarning, simulate_scene
 
     # The total is set by the first progress(done, total).

@@ -7,6 +7,7 @@ import math
 from ..errors import InputError
 from ..limits import (MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_SCIPY_REVOLUTIONS,
                       METHODS, SCIPY_METHODS)
+from ..progress import Progress
 from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (Default, add_command, add_handler, add_output_option, add_plot_option,
                       add_unit_option, check_output_paths, count, crank_angle, positive_omega,
@@ -170,9 +171,8 @@ def _table(result, paper_applies: bool = True) -> str:
     variant = int(p.label.split()[-1]) if p.label.split()[-1:] and \
         p.label.split()[-1].isdigit() else None
     paper = PAPER.get(p.drive, {}).get(variant, {}) if paper_applies and variant else {}
-    speed = f"{result.wall_time * 1e3:.1f} ms"
-    if result.compile_time:
-        speed += f" + {result.compile_time:.2f} s compile/cache load"
+    speed = f"{result.wall_time * 1e3:.1f} ms" + (
+        f" + {result.compile_time:.2f} s compile/cache load" if result.compile_time else "")
     lines = [f"{p.label or p.drive}: revolution {result.revolution}, alpha = "
              f"{result.alpha_deg:g} deg, method {result.method} ({result.backend}), {speed}",
              f"{'quantity':<9} {'unit':<7} {'min':>10} {'max':>10}   {'paper min':>10} "
@@ -186,12 +186,10 @@ def _table(result, paper_applies: bool = True) -> str:
     plo, phi = paper.get("M2V", ("-", "-"))
     lines.append(f"{name:<9} {'N m':<7} {-total.max():>10.0f} {-total.min():>10.0f}   "
                  f"{plo!s:>10} {phi!s:>10}")
-    if paper_applies:
-        lines.append("* the paper's printed moments fit this sign"
-                     + (" and the sum of both cranks" if result.M5V is not None else "")
-                     + " (docs/sley.md)")
-    else:
-        lines.append("* changed parameters: the paper did not compute this case ('-' columns)")
+    lines.append("* the paper's printed moments fit this sign"
+                 + (" and the sum of both cranks" if result.M5V is not None else "")
+                 + " (docs/sley.md)" if paper_applies else
+                 "* changed parameters: the paper did not compute this case ('-' columns)")
     lines.extend(f"note: {n}" for n in result.notes)
     return "\n".join(lines)
 
@@ -245,8 +243,6 @@ def cmd_simulate(args) -> int:
     except ValueError:
         raise ParameterError(f"--variant must be 1-7 or 'all', got {args.variant!r}") from None
     params = preset(args.drive, variant, **over)
-    from ..progress import Progress
-
     with Progress(0, params.label) as bar:     # total set by the first progress(done, total)
         result = simulate_params(params, args.revolutions, args.method, progress=bar, **opts)
     from ..sley.plots import plot_result
@@ -290,8 +286,6 @@ def cmd_crosscheck(args) -> int:
     check_output_paths(args.netlist, table="the netlist", option="--netlist")
     params = preset(args.drive, args.variant)
     theta0 = start_angle(params) if args.theta is None else math.radians(args.theta)
-    from ..progress import Progress
-
     with Progress(4, "crosscheck") as bar:      # drawn on a terminal after 1 s
         doc, netlist = crosscheck_sley(params, theta0, on_step=bar.update)
     if args.netlist:

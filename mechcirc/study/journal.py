@@ -182,9 +182,8 @@ def resumed_rows(spec: StudySpec, output, journal: str, parquet: bool) -> list[d
         done = read_rows(output, spec.columns)
     else:
         return []
-    n, k = len(spec.points), len(spec.params)
-    return [r for r in done if r["index"] < n and
-            tuple(r[p] for p in spec.params) == spec.points[r["index"]][:k]]
+    return [r for r in done if r["index"] < len(spec.points) and
+            tuple(r[p] for p in spec.params) == spec.points[r["index"]]]
 
 
 def _same_spec(where: str, recorded: str | None, spec: StudySpec) -> None:
@@ -361,9 +360,8 @@ def _journal_in_order(journal: str, width: int, chunk: int = 65536):
             index.append(int(line[:line.index(b",")]))
             offset.append(pos)
             pos += len(line)
-        idx, offs = np.asarray(index), np.asarray(offset)     # int64 views, empty or not
-        _, first = np.unique(idx, return_index=True)   # each point's first row, by index
-        offs = offs[first]
+        # each point's first row, by index (int64 views, empty or not)
+        offs = np.asarray(offset)[np.unique(np.asarray(index), return_index=True)[1]]
         in_order = bool(np.all(np.diff(offs) > 0))
         for start in range(0, offs.size, chunk):
             lines = []

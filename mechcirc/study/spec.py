@@ -129,12 +129,6 @@ def _fail(path, message: str) -> NoReturn:
 
 
 def _omega(path, value, what) -> float:
-    if isinstance(value, bool):
-        _fail(path, f"{what} must be a number [rad/s] or a string such as '50Hz'")
-    if isinstance(value, (int, float)):
-        if not finite_number(value):
-            _fail(path, f"{what} must be a finite number [rad/s], got {brief(value)}")
-        return float(value)
     if isinstance(value, str):
         try:
             w = parse_omega(value)
@@ -143,8 +137,12 @@ def _omega(path, value, what) -> float:
         if not math.isfinite(w):
             _fail(path, f"{what} must be finite, got {brief(value)}")
         return w
-    _fail(path, f"{what} must be a number [rad/s] or a string such as '50Hz', "
-                f"got {brief(value)}")
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        _fail(path, f"{what} must be a number [rad/s] or a string such as '50Hz'"
+                    + ("" if isinstance(value, bool) else f", got {brief(value)}"))
+    if not finite_number(value):
+        _fail(path, f"{what} must be a finite number [rad/s], got {brief(value)}")
+    return float(value)
 
 
 def _number(path, value, what) -> float:
@@ -345,8 +343,7 @@ def _read_netlist(data: dict, base: Path) -> tuple[str, Path]:
     except NetlistError as exc:
         _fail(("netlist",), f"netlist {str(path)!r}: {exc.message}")
     for lineno, line in enumerate(split_lines(text), 1):
-        words = re.split(r"[#;]", line, maxsplit=1)[0].split()
-        if words:
+        if words := re.split(r"[#;]", line, maxsplit=1)[0].split():
             if words[0].lower() not in SYNTAX and not words[0].startswith("*"):
                 _fail(("netlist",), f"netlist {str(path)!r} is not a netlist: its first "
                                     f"statement (line {lineno}) does not begin with one of "
