@@ -186,10 +186,11 @@ def _table(result, paper_applies: bool = True) -> str:
     plo, phi = paper.get("M2V", ("-", "-"))
     lines.append(f"{name:<9} {'N m':<7} {-total.max():>10.0f} {-total.min():>10.0f}   "
                  f"{plo!s:>10} {phi!s:>10}")
-    lines.append("* the paper's printed moments fit this sign"
-                 + (" and the sum of both cranks" if result.M5V is not None else "")
-                 + " (docs/sley.md)" if paper_applies else
-                 "* changed parameters: the paper did not compute this case ('-' columns)")
+    if paper_applies:
+        both = " and the sum of both cranks" if result.M5V is not None else ""
+        lines.append(f"* the paper's printed moments fit this sign{both} (docs/sley.md)")
+    else:
+        lines.append("* changed parameters: the paper did not compute this case ('-' columns)")
     lines.extend(f"note: {n}" for n in result.notes)
     return "\n".join(lines)
 
