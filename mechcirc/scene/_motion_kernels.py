@@ -66,21 +66,16 @@ def feval(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, q):
         return a + b * cs, -b * sn, -b * cs, 0
     n = tabs.shape[1]
     u = q - lo
-    bad = 0
     if kind == 0:
         u = u - c * math.floor(u * ic)
         i = int(u * ih)
-        if i >= n:
-            i = n - 1
+        bad = 0
     else:
         i = int(math.floor(u * ih))
-        if i < 0:
-            i = 0
-            bad = 1
-        elif i >= n:
-            i = n - 1
-            if u > n * h:
-                bad = 1
+        # (no branches: each costs blocks in every inlined copy of this function)
+        bad = int((i < 0) | ((i >= n) & (u > n * h)))
+        i = max(i, 0)
+    i = min(i, n - 1)
     s = u - i * h
     c0 = tabs[ti, i, 0]
     c1 = tabs[ti, i, 1]
