@@ -29,11 +29,19 @@ The environment variable ``MECHCIRC_NO_WARM=1`` turns that rule off: no
 detached process, and a kernel is compiled in-process on its first use, as
 numba does by default (a cluster, or a run that would rather wait once than
 run the slower path); the test suite sets it, for its subprocesses too.
+
+While numba compiles (any function, in this process, once a kernel module is
+loaded), Python's cyclic garbage collector runs less often (:data:`GC_THRESHOLD_COMPILING`
+instead of its first threshold of 700 new objects, restored after the outermost compile):
+numba's compiler makes and copies millions of small objects, and at the default the
+collector took about 1.5 s of a 16 s cold compile of the scene kernels, for 23 MB
+more at the compile's peak (docs/performance.md, "seventeenth session").
 """
 
 from __future__ import annotations
 
 import contextlib
+import gc
 import os
 import sys
 from pathlib import Path
@@ -42,6 +50,10 @@ __all__ = ["decorators", "COMPILED", "use", "in_cache", "warm_in_background"]
 
 #: None: each caller decides; True: always the kernel; False: never (see above).
 COMPILED: bool | None = None
+
+#: The collector's first threshold (new container objects between two young collections)
+#: while numba compiles; Python's default is 700.
+GC_THRESHOLD_COMPILING = 10_000
 
 
 def _identity(fn):
@@ -62,11 +74,41 @@ def decorators(force_python: bool = False, nrt: bool = True):
         except ImportError:          # the "fast" extra is not installed
             pass
         else:
+            _collect_less_while_compiling()
             flags: dict = {} if nrt else {"_nrt": False}
             jit = njit(cache=True, error_model="numpy", **flags)     # (njit's decorators)
             jit_inline = njit(cache=True, error_model="numpy", inline="always")
             return True, jit, jit_inline
     return False, _identity, _identity
+
+
+_GC_RULE: list = []
+
+
+def _collect_less_while_compiling() -> None:
+    """Have numba's compile events (once per process) raise the collector's first threshold
+    to :data:`GC_THRESHOLD_COMPILING` for the outermost compile, then put it back."""
+    if _GC_RULE:
+        return
+    from numba.core import event
+
+    class Rule(event.Listener):
+        depth = 0
+        saved = (700, 10, 10)
+
+        def on_start(self, ev):
+            if self.depth == 0:
+                self.saved = gc.get_threshold()
+                gc.set_threshold(max(self.saved[0], GC_THRESHOLD_COMPILING), *self.saved[1:])
+            self.depth += 1
+
+        def on_end(self, ev):
+            self.depth -= 1
+            if self.depth == 0:
+                gc.set_threshold(*self.saved)
+
+    _GC_RULE.append(Rule())
+    event.register("numba:compile", _GC_RULE[0])
 
 
 def load(name: str, **flags):

@@ -66,21 +66,16 @@ def feval(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, q):
         return a + b * cs, -b * sn, -b * cs, 0
     n = tabs.shape[1]
     u = q - lo
-    bad = 0
     if kind == 0:
         u = u - c * math.floor(u * ic)
         i = int(u * ih)
-        if i >= n:
-            i = n - 1
+        bad = 0
     else:
         i = int(math.floor(u * ih))
-        if i < 0:
-            i = 0
-            bad = 1
-        elif i >= n:
-            i = n - 1
-            if u > n * h:
-                bad = 1
+        # (no branches: each costs blocks in every inlined copy of this function)
+        bad = int((i < 0) | ((i >= n) & (u > n * h)))
+        i = max(i, 0)
+    i = min(i, n - 1)
     s = u - i * h
     c0 = tabs[ti, i, 0]
     c1 = tabs[ti, i, 1]
@@ -336,6 +331,23 @@ def body_outputs(nf, ne, FI, BI, aux, work):
         aux[k] = work[7, f] * work[2, p] + work[8, f] * work[1, p] * work[1, p] if f < nf else 0.0
 
 
+@_jit_inline
+def accelerations(nf, want, bad, FI, BI, EI, MOI, PRIG, dy, aux, work):
+    """Each free part's q̈ = (Q − ½ m' q̇²)/m (work row 2) and the derivatives [q̇, q̈] of
+    y into dy; with ``want`` the bodies' outputs (:func:`body_outputs`); the out-of-range
+    flag ``bad`` last in aux."""
+    npart = PRIG.shape[0]
+    n = npart - 1
+    ne = EI.shape[0]
+    for i in range(1, npart):
+        work[2, i] = (work[5, i] - 0.5 * work[4, i] * work[1, i] * work[1, i]) / work[3, i]
+        dy[i - 1] = work[1, i]
+        dy[n + i - 1] = work[2, i]
+    if want:
+        body_outputs(nf, ne, FI, BI, aux, work)
+    aux[BI.shape[0] + 2 * ne + 1 + MOI.shape[0]] = bad
+
+
 @_leaf
 def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work):
     """Derivatives of y = [q_1..q_n, q̇_1..q̇_n] into dy; outputs into aux.
@@ -344,30 +356,14 @@ def rhs(t, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, wo
     drive moment | moments (Mo) | out-of-range flag].  work rows: 0 q, 1 q̇, 2 q̈, 3 m,
     4 m', 5 Q, then 6–8 each function's value and first and second derivatives.
     """
-    npart = PRIG.shape[0]
-    n = npart - 1
-    nf = int(PV[3])
-    want = PV[4] != 0.0
-    nb = BI.shape[0]
-    ne = EI.shape[0]
-    nmo = MOI.shape[0]
+    # (:func:`rk_step` makes the same five calls: see there)
+    nf, want, nb, ne, nmo = int(PV[3]), PV[4] != 0.0, BI.shape[0], EI.shape[0], MOI.shape[0]
     theta, omega, accel, th_load, w_load = crank_motion(PV, t)
     bad = part_kinematics(y, theta, omega, accel, nf, FI, FF, tabs, MI_, MW, PRIG, work)
     element_forces(want, nb, EI, EF, FI, FF, tabs, th_load, w_load, aux, work,
                    nb + 2 * ne + 2 + nmo)
     window_moments(nb + 2 * ne + 1, FI, MOI, MOF, aux, work)
-    for i in range(1, npart):
-        work[2, i] = (work[5, i] - 0.5 * work[4, i] * work[1, i] * work[1, i]) / work[3, i]
-        dy[i - 1] = work[1, i]
-        dy[n + i - 1] = work[2, i]
-    if want:
-        body_outputs(nf, ne, FI, BI, aux, work)
-    aux[nb + 2 * ne + 1 + nmo] = bad
-
-
-#: :func:`rhs` inlined where :func:`rk_step` calls it (the same source; compiled in the
-#: step's context the steps run about 10 % faster, for about 9 s more of a cold compile).
-rhs_in_step = _jit_inline(getattr(rhs, "py_func", rhs))
+    accelerations(nf, want, bad, FI, BI, EI, MOI, PRIG, dy, aux, work)
 
 
 @_leaf
@@ -468,6 +464,7 @@ def rk_step(t, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, E
     :func:`deriv` (the scene's :func:`rhs`, or the shaft's; ``zy``, ``zd`` its scratch)."""
     n = y.shape[0]
     s = TB.shape[0]
+    nf, want, nb, ne, nmo = int(PV[3]), PV[4] != 0.0, BI.shape[0], EI.shape[0], MOI.shape[0]
     for i in range(1, s + 1):           # the stages, then (i = s) the step's end
         for m in range(n):
             acc = 0.0
@@ -477,9 +474,18 @@ def rk_step(t, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, E
                     acc += c * K[j, m]
             tmp[m] = y[m] + hh * acc
         ti = t + TC[i] * hh if i < s else t + hh
-        if shaft_mode(PV) == 0:     # :func:`deriv`, with the scene's rhs compiled in place
-            rhs_in_step(ti, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, K[i],
-                        aux, work)
+        if shaft_mode(PV) == 0:
+            # :func:`rhs`'s five calls, its equations compiled in place (the steps run about
+            # 10 % faster than calling it): written here, not rhs inlined whole, since numba's
+            # inlining copies the callee block by block, each copy with all its variables
+            # (rhs: 107 blocks x 2,566 variables, 3 s of a cold compile).
+            theta, omega, accel, th_load, w_load = crank_motion(PV, ti)
+            bad = part_kinematics(tmp, theta, omega, accel, nf, FI, FF, tabs, MI_, MW, PRIG,
+                                  work)
+            element_forces(want, nb, EI, EF, FI, FF, tabs, th_load, w_load, aux, work,
+                           nb + 2 * ne + 2 + nmo)
+            window_moments(nb + 2 * ne + 1, FI, MOI, MOF, aux, work)
+            accelerations(nf, want, bad, FI, BI, EI, MOI, PRIG, K[i], aux, work)
         else:
             shaft_rhs(ti, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, K[i], aux,
                       work, zy, zd)
