@@ -44,6 +44,7 @@ from typing import Literal
 
 import numpy as np
 
+from . import nodal
 from .circuit import Circuit
 from .errors import InputError, NetlistError, SolverError, UnloadedElementWarning, warn
 from .sources import data_frame, did_you_mean, real_number
@@ -225,10 +226,8 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
         warn(f"{len(system.unloaded)} element(s) lie on no path between the drive's nodes "
              f"{d.n1!r} and {d.n2!r} and carry no force: {', '.join(system.unloaded)}",
              UnloadedElementWarning)
-    from .nodal import DENSE_LIMIT
-
     # Small networks: dense matrices from the stamps, and no scipy for undamped ones.
-    M, D, Ks, G_released, G_held, damped = pencil(system, dense=system.size <= DENSE_LIMIT)
+    M, D, Ks, G_released, G_held, damped = pencil(system, dense=system.size <= nodal.DENSE_LIMIT)
     held, v_held, released, v_released, keep_h, keep_r = _solved(
         M, D, Ks, G_released, G_held, damped, omega_max, vectors)
     pairs = []          # ((kind, s, error, must polish), (vector, repeated)) of each root
@@ -856,8 +855,6 @@ def settled(s: np.ndarray, err: np.ndarray, damped: bool) -> np.ndarray:
 
 def _g_and_delta(system, s: np.ndarray, pole: np.ndarray):
     """g(s) (K, or 1/K at anti-resonances) and its absolute rounding uncertainty."""
-    from . import nodal
-
     # Anti-resonances on the held system (built once per system): 1/K = −q there, and A
     # is singular at the root while the held matrix is not.
     systems = (system, system.memo("_held", lambda: nodal.held(system)))
@@ -1045,13 +1042,11 @@ def element_patterns(system) -> dict[str, np.ndarray]:
     M = Σ_e (value·η)_e B_e (the entries :func:`mechcirc.nodal.stamps` gives
     and :func:`mechcirc.nodal.assemble` sums); projected, Zᵀ M Z = Σ_e s_e Zᵀ B_e Z.
     """
-    from .nodal import stamps
-
     n_nodes = len(system.nodes)
     index = {n: i for i, n in enumerate(system.nodes)}   # a node not in it: the reference
     E, pos = len(system.elements), {e.name: k for k, e in enumerate(system.elements)}
     B = {x: np.zeros((E, n_nodes, n_nodes)) for x in ("mass", "spring", "damper")}
-    for kind, r, c, sign, source, _ in stamps(system.elements, (), index):
+    for kind, r, c, sign, source, _ in nodal.stamps(system.elements, (), index):
         if kind in B:
             B[kind][pos[source.name], r, c] += sign
     return B
@@ -1060,20 +1055,21 @@ def element_patterns(system) -> dict[str, np.ndarray]:
 def stacked_problem(Z, B, S, damped: bool, omega_max):
     """The roots of one stacked eigenproblem (constraint basis ``Z``, patterns ``B``,
     element values ``S`` per design): :func:`_stacked_damped` or :func:`_stacked_modes`."""
+    if not Z.shape[1]:                      # nothing left to move: no roots, solved
+        D = S.shape[0]
+        return np.zeros((D, 0), complex if damped else float), np.zeros((D, 0)), \
+            np.ones(D, dtype=bool)
     if damped:
         Mr, Dr, Kr = (_weighted_sum(S, Z.T @ B[x] @ Z) for x in ("mass", "damper", "spring"))
         return _stacked_damped(Mr, Dr, Kr, omega_max)
     # The massless directions are those of the pattern: with every value > 0,
     # null(Σ m_e B_e) = ∩ null(B_e) in every design.  Ordered last, they are
     # condensed out statically (_undamped_stack), as _undamped does per design.
-    n0 = 0
-    if Z.shape[1]:
-        mu, V = np.linalg.eigh(Z.T @ B["mass"].sum(axis=0) @ Z)
-        massless = mu <= 1e-10 * max(mu.max(), 1e-300)
-        Z = Z @ np.concatenate([V[:, ~massless], V[:, massless]], axis=1)
-        n0 = int(massless.sum())
+    mu, V = np.linalg.eigh(Z.T @ B["mass"].sum(axis=0) @ Z)
+    massless = mu <= 1e-10 * max(mu.max(), 1e-300)
+    Z = Z @ np.concatenate([V[:, ~massless], V[:, massless]], axis=1)
     Mr, Kr = (_weighted_sum(S, Z.T @ B[x] @ Z) for x in ("mass", "spring"))
-    return _stacked_modes(Mr, Kr, n0, omega_max)
+    return _stacked_modes(Mr, Kr, int(massless.sum()), omega_max)
 
 
 def held_and_released(s_h, s_r, err_h, err_r) -> tuple:
@@ -1151,19 +1147,17 @@ def _stacked_modes(M: np.ndarray, K: np.ndarray, n0: int, omega_max):
     matrix that is singular to within 1e-13 of its largest eigenvalue, where
     :func:`_undamped` condenses, or values beyond float64's range).
     """
-    D, k = M.shape[0], M.shape[1]
-    if k == 0:
-        return np.zeros((D, 0)), np.zeros((D, 0)), np.ones(D, dtype=bool)
     scale_m, w_ref, Ms, Ks, ok = _scaled_stack(M, K)
     lam, regular = _undamped_stack(Ms, Ks, n0)
     ok &= regular
     lam = np.where(np.isfinite(lam), lam, -np.inf)
     top = np.maximum(1.0, lam.max(axis=1, initial=0.0))
     live, eps = (lam > 1e-11 * top[:, None]) & ok[:, None], np.finfo(float).eps
+    lam = np.where(live, lam, 1.0)
     with np.errstate(all="ignore"):
-        w = np.where(live, w_ref[:, None] * np.sqrt(np.where(live, lam, 1.0)), np.nan)
-        err = np.where(live, eps * (np.where(live, lam, 1.0).max(axis=1, initial=1.0)[:, None]
-                                    / np.where(live, lam, 1.0)) * _rounding_factor(k), np.nan)
+        w = np.where(live, w_ref[:, None] * np.sqrt(lam), np.nan)
+        err = np.where(live, eps * (lam.max(axis=1, initial=1.0)[:, None] / lam)
+                       * _rounding_factor(M.shape[1]), np.nan)
     if omega_max is not None:
         beyond = w > omega_max * (1 + 1e-6)
         w[beyond] = err[beyond] = np.nan
@@ -1187,8 +1181,6 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
     """
     n, k = M.shape[0], M.shape[1]
     eps = np.finfo(float).eps
-    if k == 0:
-        return np.zeros((n, 0), dtype=complex), np.zeros((n, 0)), np.ones(n, dtype=bool)
     scale_m, w_ref, Ms, Ks, ok = _scaled_stack(M, K)
     with np.errstate(all="ignore"):
         Ds = Dm / (scale_m * w_ref)[:, None, None]
