@@ -475,14 +475,13 @@ def part_singular_values(scene: Scene, part, m: _Motion):
     origin = {b: m.pos[bodies[b][0]] for b in part}
     rows = []
 
-    def row(*entries):        # (body, sign, x-y coefficients or None, φ coefficient)
+    def row(*entries):        # (moving body, sign, x-y coefficients or None, φ coefficient)
         r = np.zeros(shape)
         for body, sign, xy, turn in entries:
-            if body != "ground":
-                j = cols[body]
-                if xy is not None:
-                    r[..., j:j + 2] += sign * xy
-                r[..., j + 2] += sign * turn
+            j = cols[body]
+            if xy is not None:
+                r[..., j:j + 2] += sign * xy
+            r[..., j + 2] += sign * turn
         rows.append(r)
 
     for p in sorted({p for b in part for p in bodies[b]}):
