@@ -52,24 +52,21 @@ def read_bytes(path: str | os.PathLike, expected: str) -> bytes:
         too large.
     """
     source = os.fspath(path)
-    try:
+    try:                # (the checks' NetlistErrors are no OSError: they pass through)
         info = os.stat(source)
-    except FileNotFoundError:
-        raise NetlistError("no such file", source, 0, 0, f"the path of {expected}") from None
-    except OSError as exc:
-        raise NetlistError(f"cannot read: {exc.strerror}", source) from None
-    if stat.S_ISDIR(info.st_mode):
-        raise NetlistError("is a directory", source, 0, 0, f"{expected} file") from None
-    if not stat.S_ISREG(info.st_mode):
-        raise NetlistError("is not a regular file (a device, pipe or socket); nothing was read",
-                           source, 0, 0, f"{expected} file")
-    if info.st_size > MAX_INPUT_BYTES:
-        raise NetlistError(f"is {info.st_size:,} bytes, more than the limit of "
-                           f"{MAX_INPUT_BYTES:,} bytes; nothing was read", source, 0, 0,
-                           f"{expected} file")
-    try:
+        if stat.S_ISDIR(info.st_mode):
+            raise NetlistError("is a directory", source, 0, 0, f"{expected} file")
+        if not stat.S_ISREG(info.st_mode):
+            raise NetlistError("is not a regular file (a device, pipe or socket); nothing was "
+                               "read", source, 0, 0, f"{expected} file")
+        if info.st_size > MAX_INPUT_BYTES:
+            raise NetlistError(f"is {info.st_size:,} bytes, more than the limit of "
+                               f"{MAX_INPUT_BYTES:,} bytes; nothing was read", source, 0, 0,
+                               f"{expected} file")
         with open(source, "rb") as fh:
             data = fh.read(MAX_INPUT_BYTES + 1)
+    except FileNotFoundError:
+        raise NetlistError("no such file", source, 0, 0, f"the path of {expected}") from None
     except OSError as exc:
         raise NetlistError(f"cannot read: {exc.strerror}", source) from None
     if len(data) > MAX_INPUT_BYTES:
