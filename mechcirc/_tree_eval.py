@@ -442,9 +442,7 @@ def plan(root: Node) -> Plan:
         return found
     kind, kids, kstart, leaf_of, leaf_el, levers = _flat_nodes(root)
     kind_a = np.array(kind, dtype=np.int8)
-    kstart_a = np.array(kstart, dtype=np.int64)
-    kids_a = np.array(kids, dtype=np.int64)
-    owner = np.array(leaf_of, dtype=np.int64)
+    kstart_a, kids_a, owner = (np.array(x, dtype=np.int64) for x in (kstart, kids, leaf_of))
     code = np.array([_KIND_CODE[e.kind] for e in leaf_el], dtype=np.int64)
     scaled = np.array([e.value for e in leaf_el], dtype=float) * \
         np.array([e.eta for e in leaf_el], dtype=float)
