@@ -336,10 +336,7 @@ def number_error(value, what: str, *, positive: bool = False,
     -------
     tuple of (str, str) or None
     """
-    ok = finite_number(value)
-    if ok and positive:
-        ok = value > 0 or (allow_zero and value == 0)
-    if ok:
+    if finite_number(value) and (not positive or value > 0 or allow_zero and value == 0):
         return None
     need = "a finite number" + ("" if not positive else " ≥ 0" if allow_zero else " > 0")
     return f"{what} must be {need}, got {brief(value)}", need
@@ -400,19 +397,16 @@ def summary_repr(result) -> str:
     -------
     str
     """
-    parts = []
-    for f in fields(result):
-        if f.repr:
-            value = getattr(result, f.name)
-            shape = "×".join(map(str, getattr(value, "shape", ())))
-            if shape:
-                text = f"<array {shape}>"
-            elif isinstance(value, (tuple, list)) and len(value) > 8:
-                text = f"<{type(value).__name__} of {len(value)}>"
-            else:
-                text = brief(value)
-            parts.append(f"{f.name}={text}")
-    return f"{type(result).__name__}({', '.join(parts)})"
+    shown = (f"{f.name}={_summary(getattr(result, f.name))}" for f in fields(result) if f.repr)
+    return f"{type(result).__name__}({', '.join(shown)})"
+
+
+def _summary(value) -> str:
+    """One field of :func:`summary_repr`: an array's shape, a long tuple's or list's
+    length, else :func:`brief`."""
+    shape = "×".join(map(str, getattr(value, "shape", ())))
+    return f"<array {shape}>" if shape else f"<{type(value).__name__} of {len(value)}>" \
+        if isinstance(value, (tuple, list)) and len(value) > 8 else brief(value)
 
 
 def data_frame(rows, units: dict[str, str]):
