@@ -423,10 +423,8 @@ def parse_quantity(text: str, role: str | None = None, *, what: str = "value") -
         try:
             u = parse_unit(unit)
         except UnitError as exc:
-            hint = exc.expected
-            if unit.lower() in SPICE_SUFFIXES:
-                hint = (f"no SPICE suffixes in mechcirc: write {number}e3 for {number}k, "
-                        f"or a unit such as {number} kN/m")
+            hint = (f"no SPICE suffixes in mechcirc: write {number}e3 for {number}k, or a unit "
+                    f"such as {number} kN/m") if unit.lower() in SPICE_SUFFIXES else exc.expected
             raise UnitError(exc.message, text.index(unit) + exc.offset, hint) from None
     try:
         return convert(value, u, role or "")
