@@ -241,9 +241,8 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
     pairs = [(t, v) for t, v in pairs if (kind is None or t[0] == kind) and
              (omega_max is None or abs(t[1]) <= omega_max * (1 + 1e-6))]
     roots = [t for t, _ in pairs]
-    out = list(zip(_polish(system, roots, damped), [v for _, v in pairs])) if roots else []
-    if omega_max is not None:
-        out = [(r, v) for r, v in out if r.omega <= omega_max]
+    out = [(r, v) for r, v in zip(_polish(system, roots, damped), [x for _, x in pairs])
+           if omega_max is None or r.omega <= omega_max] if roots else []
     out = sorted(out, key=lambda rv: (rv[0].omega, rv[0].kind))
     ties = tie_order(np.array([[r.kind == "antiresonance" for r, _ in out]], bool),
                      np.array([[r.omega for r, _ in out]], float))[0]
@@ -1306,8 +1305,7 @@ def _undamped_stack(M: np.ndarray, K: np.ndarray, n0: int):
     A = Linv @ Kc @ np.swapaxes(Linv, 1, 2)
     A += np.swapaxes(A, 1, 2)
     A *= 0.5
-    lam = np.linalg.eigvalsh(A)
-    return np.where(regular[:, None], lam, np.nan), regular
+    return np.where(regular[:, None], np.linalg.eigvalsh(A), np.nan), regular
 
 
 def _secant_designs(p, w0: np.ndarray, pole: np.ndarray, e0: np.ndarray):
