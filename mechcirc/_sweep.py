@@ -669,8 +669,7 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
     max |Q0| = inf (undamped resonance at omega = 100 rad/s)
     """
     circuit, grid, lo, hi = _peak_band(result, omega_min, omega_max)
-    if grid is not None:
-        method = grid.method
+    method = method if grid is None else grid.method          # a sweep's own
     if quantity is None:
         quantity = "v0" if circuit.drive.kind == "force" else "Q0"
     if quantity not in ("Q0", "v0", "K", "S"):
