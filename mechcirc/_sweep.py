@@ -506,11 +506,9 @@ def _sweep_tree(circuit: Circuit, tree: Node, omega, error: bool = False) -> Swe
     else:
         K = _chunked(lambda w: evaluate(tree, w), omega, complex)
     K = singular_limits(K, omega)
-    result = Sweep(omega=omega, K=K, drive=circuit.require_drive(), method="sp",
-                   name=circuit.name, tree=tree, circuit=circuit)
-    if error:
-        result._cache["error"] = singular_error(K, err)
-    return result
+    return Sweep(omega=omega, K=K, drive=circuit.require_drive(), method="sp",
+                 name=circuit.name, tree=tree, circuit=circuit,
+                 _cache={"error": singular_error(K, err)} if error else {})
 
 
 def _sweep_nodal(circuit: Circuit, omega, refine: bool = True) -> Sweep:
@@ -523,10 +521,9 @@ def _sweep_nodal(circuit: Circuit, omega, refine: bool = True) -> Sweep:
     solved = nodal.solve(circuit.nodal, omega, refine=refine, keep_x=False)
     K, err = _nodal_singular_limits(circuit.nodal, solved.K, solved.error, omega)
     K, err, notes = _tree_where_no_digit(circuit, omega, K, err)
-    result = Sweep(omega=omega, K=K, drive=circuit.require_drive(), method="nodal",
-                   name=circuit.name, circuit=circuit, notes=notes, refine=refine)
-    result._cache["error"] = err
-    return result
+    return Sweep(omega=omega, K=K, drive=circuit.require_drive(), method="nodal",
+                 name=circuit.name, circuit=circuit, notes=notes, refine=refine,
+                 _cache={"error": err})
 
 
 def _tree_where_no_digit(circuit: Circuit, omega, K, err):
@@ -672,8 +669,7 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
     max |Q0| = inf (undamped resonance at omega = 100 rad/s)
     """
     circuit, grid, lo, hi = _peak_band(result, omega_min, omega_max)
-    if grid is not None:
-        method = grid.method
+    method = method if grid is None else grid.method          # a sweep's own
     if quantity is None:
         quantity = "v0" if circuit.drive.kind == "force" else "Q0"
     if quantity not in ("Q0", "v0", "K", "S"):

@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from . import _jit
 from ._tree import Leaf, Node, Parallel, Reflect, Series, postorder
-from .circuit import LAWS, Element, law_terms
+from .circuit import LAWS, Circuit, Drive, Element, law_terms
 
 __all__ = ["evaluate", "evaluate_designs", "push_down", "plan", "Plan", "compiled_evaluator",
            "KERNEL_MIN_WORK"]
@@ -164,13 +164,8 @@ def _fast_then_checked(root, omega, error, condition, designs):
         w = omega[bad] if sub is None else omega[bad].reshape(-1, omega.shape[1])
         again = evaluate(root, w, error=error, condition=condition, designs=sub,
                          _mode="checked")
-        if sub is not None:
-            again = tuple(a.ravel() for a in again) if isinstance(again, tuple) \
-                else again.ravel()
-        if isinstance(out, tuple):
-            K[bad], out[1][bad] = again
-        else:
-            K[bad] = again
+        for target, part in (zip(out, again) if isinstance(out, tuple) else [(K, again)]):
+            target[bad] = part.ravel()      # (rows of designs: flattened as ``bad`` picks)
     return out
 
 
@@ -203,9 +198,8 @@ def _postorder_values(root, omega, track: bool, keep: bool, checked: bool, desig
         stack.append(val)
         if keep:
             values[id(node)] = val
-    top = stack[-1] if stack else _leaf_value(root.element, omega, inv_omega, track,
-                                              designs)
-    return top, values
+    return (stack[-1] if stack else _leaf_value(root.element, omega, inv_omega, track,
+                                                designs)), values
 
 
 #: root -> its internal nodes in postorder, each ``(node, is a lever, its number of
@@ -282,8 +276,6 @@ def compiled_evaluator(compile: bool = True):
 
 def warm_kernel() -> None:
     """Compile the plan evaluator into numba's disk cache (the argument types a sweep uses)."""
-    from .circuit import Circuit, Drive
-
     c = Circuit((Element("spring", "k", "a", "b", 1.0), Element("mass", "m", "b", "0", 1.0),
                  Element("damper", "c", "a", "0", 1.0)), Drive("V", "a", "0", "velocity", 1.0))
     kernel = compiled_evaluator()
@@ -449,9 +441,7 @@ def plan(root: Node) -> Plan:
         return found
     kind, kids, kstart, leaf_of, leaf_el, levers = _flat_nodes(root)
     kind_a = np.array(kind, dtype=np.int8)
-    kstart_a = np.array(kstart, dtype=np.int64)
-    kids_a = np.array(kids, dtype=np.int64)
-    owner = np.array(leaf_of, dtype=np.int64)
+    kstart_a, kids_a, owner = (np.array(x, dtype=np.int64) for x in (kstart, kids, leaf_of))
     code = np.array([_KIND_CODE[e.kind] for e in leaf_el], dtype=np.int64)
     scaled = np.array([e.value for e in leaf_el], dtype=float) * \
         np.array([e.eta for e in leaf_el], dtype=float)
@@ -630,12 +620,9 @@ def _leaf_value(e: Element, omega, inv_omega, track: bool = False,
                 designs: tuple | None = None) -> _Value:
     """K of a leaf standing alone (the root, or under a lever)."""
     real, inv, om = law_terms(e.kind, _scaled(e, designs))
-    if LAWS[e.kind].power < 0:
-        v = _Value(True, inv_omega * inv)
-    elif LAWS[e.kind].power > 0:
-        v = _Value(True, omega * om)
-    else:
-        v = _Value(False, np.full(omega.shape, real, dtype=complex))
+    power = LAWS[e.kind].power          # K = j·inv/ω, j·om·ω or real
+    v = _Value(power != 0, inv_omega * inv if power < 0 else omega * om if power > 0
+               else np.full(omega.shape, real, dtype=complex))
     if track:
         v.mag = np.abs(v.array)
         v.rho = 4 * _U      # value·η, 1/s, 1/ω and the product
@@ -687,21 +674,11 @@ def _combine(parts: list, omega, inv_omega, zero, keep: bool, checked: bool,
     own = keep and series
     cplx = None
     for v in parts:
-        a = v.array
+        a = v.array if series else _inverse(v.array, v.imaginary, checked)
         if v.imaginary:
-            if not series:
-                a = _MINUS_ONE / a          # 1/(jX) = j(-1/X)
-            if imag is None:
-                imag = a.copy() if own else a
-            else:
-                imag += a
+            imag = _plus(imag, a, own)
         else:
-            if not series:
-                a = _reciprocal(a) if checked else np.reciprocal(a)
-            if cplx is None:
-                cplx = a.copy() if own else a
-            else:
-                cplx += a
+            cplx = _plus(cplx, a, own)
     if has_real:
         cplx = np.full(omega.shape, real, dtype=complex) if cplx is None else cplx + real
     if cplx is None:
@@ -715,10 +692,23 @@ def _combine(parts: list, omega, inv_omega, zero, keep: bool, checked: bool,
         total = _Value(False, cplx)
     if zero is not None:
         _node_bound(total, parts, omega, inv_omega, groups, zero)
-    if not series:              # K = 1/S, in place
-        a = total.array
-        total.array = _MINUS_ONE / a if total.imaginary else \
-            _reciprocal(a) if checked else np.reciprocal(a)   # 1/(jX) = j(-1/X)
+    if not series:              # K = 1/S
+        total.array = _inverse(total.array, total.imaginary, checked)
+    return total
+
+
+def _inverse(a, imaginary: bool, checked: bool):
+    """1/a of a value: 1/(jX) = j(−1/X) for an imaginary one (``a`` holds X), else the
+    complex reciprocal (with :func:`_reciprocal`'s limits when ``checked``)."""
+    return _MINUS_ONE / a if imaginary else _reciprocal(a) if checked else np.reciprocal(a)
+
+
+def _plus(total, a, copy: bool):
+    """``total`` + ``a``, in place; ``a`` itself (or its copy when ``copy``) where there is
+    no ``total`` yet."""
+    if total is None:
+        return a.copy() if copy else a
+    total += a
     return total
 
 
@@ -826,10 +816,7 @@ def through_reciprocal(rho: NDArray) -> NDArray:
     if not (isinstance(rho, np.ndarray) and rho.ndim):
         # A scalar ρ (a leaf's, constant in ω: fuzz seed 599): work on an array.
         rho = np.atleast_1d(np.asarray(rho, dtype=float))
-    out = _ONE - rho
-    np.maximum(out, _ZERO, out=out)
-    np.divide(rho, out, out=out)
-    return out
+    return _over_excess(rho, _ONE)          # ρ/(1 − ρ) as E/(A − E), A = 1
 
 
 def _over_excess(E: NDArray, A: NDArray) -> NDArray:

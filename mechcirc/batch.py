@@ -41,8 +41,12 @@ from ._memo import Memos
 from .circuit import Circuit, units_of
 from .errors import InputError, MechcircError, NotSeriesParallelError
 from ._sweep import (UNDAMPED_ZETA, real_omega, drive_force, drive_velocity, peak, point_flags,
-                     singular_error)
-from .resonances import design_values, template_levers
+                     singular_error, singular_limits, sweep as sweep_one)
+from .reduction import evaluate_designs, plan
+from .resonances import (MAX_UNKNOWNS, MAX_UNKNOWNS_DAMPED, POLISH_BELOW, Resonance, batched_roots,
+                         constraint_basis, design_values, element_patterns, find_resonances,
+                         g_and_bound, held_and_released, pencil, secant_polish, settled,
+                         shared_roots_free, sorted_roots, stacked_problem, template_levers)
 from .sources import brief, data_frame, summary_repr
 
 __all__ = ["designs", "from_circuits", "network_shape", "Designs", "DesignSweep", "DesignResonances",
@@ -315,8 +319,6 @@ class Designs(Memos):
 
     def _plan(self, which: NDArray):
         """:meth:`plan`, built."""
-        from .reduction import plan
-
         try:
             tree = self.circuit.tree
         except NotSeriesParallelError:
@@ -327,10 +329,9 @@ class Designs(Memos):
         rows = np.array([row[e.name] for e in p.leaves], dtype=np.int64)
         scaled = self.values[rows][:, which] * self.eta[rows][:, which]
         ratios = self.ratios[[lev[lv.name] for lv in p.levers]][:, which]
-        p = replace(p.with_values(scaled, ratios), numpy=(
+        return replace(p.with_values(scaled, ratios), numpy=(
             tree, {e.name: scaled[i][:, None] for i, e in enumerate(p.leaves)},
             {lv.name: ratios[i][:, None] for i, lv in enumerate(p.levers)}))
-        return p
 
     def sweep(self, omega: ArrayLike) -> "DesignSweep":
         """K, Q0, v0, error bound and flags of every design at each ω [rad/s].
@@ -341,8 +342,6 @@ class Designs(Memos):
         :func:`mechcirc.sweep` one by one.  Each row equals the single
         design's :class:`~mechcirc.Sweep` (K, error and flags).
         """
-        from ._sweep import singular_limits, sweep as sweep_one
-
         omega = real_omega(omega)
         if not np.isfinite(omega).all() or (omega < 0).any():
             raise InputError("omega must be a one-dimensional array of finite values >= 0")
@@ -353,8 +352,6 @@ class Designs(Memos):
             batched, K, err = _nodal_sweep(self, batched, omega) if batched.size else \
                 (batched, np.empty((0, W), dtype=complex), np.empty((0, W)))
         else:
-            from .reduction import evaluate_designs
-
             K, err = evaluate_designs(p, omega, error=True)
             K = singular_limits(K, omega[None, :])
         if batched.size < D:            # rows for the designs evaluated one by one below
@@ -385,8 +382,6 @@ class Designs(Memos):
         held and released problems) go through
         :func:`mechcirc.resonances.find_resonances` one by one (``single``).
         """
-        from .resonances import batched_roots, find_resonances
-
         D = self.size
         found = batched_roots(self, omega_max) or _nodal_roots(self, omega_max)
         none: NDArray = np.zeros(0, dtype=np.int64)
@@ -585,9 +580,6 @@ def _nodal_roots(ds: Designs, omega_max):
 
 def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
     """:func:`_nodal_roots` for one group of designs ``which``."""
-    from .resonances import (POLISH_BELOW, constraint_basis, element_patterns, held_and_released,
-                             pencil, settled, shared_roots_free, sorted_roots)
-
     *_, G_released, G_held, damped = pencil(system)
     B, nn = element_patterns(system), len(system.nodes)
     S, parts = _stacked_matrices(ds, system, which)
@@ -619,8 +611,6 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
 
 def _pencil_roots(Z, B: dict, S, damped: bool, omega_max):
     """``(roots, errors, ok, must polish)`` on basis ``Z``; None: too big."""
-    from .resonances import MAX_UNKNOWNS, MAX_UNKNOWNS_DAMPED, stacked_problem
-
     if Z.shape[1] > (MAX_UNKNOWNS_DAMPED if damped else MAX_UNKNOWNS):
         return None
     x, e, ok = stacked_problem(Z, B, S, damped, omega_max)
@@ -646,7 +636,6 @@ def _polish_nodal(stacks: list, design: NDArray, s0: NDArray, pole: NDArray, e0:
     its drive-held system (:func:`_stacked_matrices`).  Returns ``(s, relative error)``.
     """
     from ._nodal_residual import total_error
-    from .resonances import g_and_bound, secant_polish
 
     def evaluate(x, i, want):
         sys_, S, parts = stacks[i]
@@ -661,8 +650,6 @@ def _polish_nodal(stacks: list, design: NDArray, s0: NDArray, pole: NDArray, e0:
 def _stacked_matrices(ds: Designs, system, which: NDArray):
     """The value·η of the nodal system's elements in designs ``which`` (D', E), and their
     D + C, M and Kₛ as dense stacks (D', n, n), from the element stamp patterns."""
-    from .resonances import element_patterns
-
     S = design_values(ds, system, which)
     B, n, nn = element_patterns(system), system.size, len(system.nodes)
     parts = []
@@ -782,8 +769,6 @@ class DesignResonances:
 
     def list(self, d: int) -> list:
         """Design ``d``'s roots as :class:`~mechcirc.resonances.Resonance` objects."""
-        from .resonances import Resonance
-
         return [Resonance("antiresonance" if self.kind[d, i] == "antiresonance" else
                           "resonance", float(self.omega[d, i]),
                           float(self.omega_d[d, i]), float(self.zeta[d, i]),

@@ -31,7 +31,10 @@ from __future__ import annotations
 import math
 from typing import Literal
 
-from .errors import InputError, MechcircError
+import numpy as np
+
+from .circuit import units_of
+from .errors import InputError, MechcircError, did_you_mean
 from .units import FREQUENCY_UNITS, in_unit
 
 __all__ = ["new_panels", "one_panel", "plot_sweep", "plot_transient", "plot_forces", "plot_comparison", "plot_study", "plot_periodic",
@@ -135,8 +138,6 @@ def _refined(result, resonances):
     with the sweep's method), so a close resonance/anti-resonance pair that the
     grid steps over is drawn through; without a circuit (or roots) the sweep as is.
     """
-    import numpy as np
-
     force_drive = getattr(result.drive, "kind", "velocity") == "force"
     omega, K, flags = result.omega, result.K, result.flags
     R = result.v0 if force_drive else result.Q0
@@ -163,7 +164,6 @@ def _label_resonances(ax, resonances, per_unit: float) -> None:
     """Each root's frequency written at the top of ``ax``, on the highest row where
     it stands at least :data:`LABEL_GAP` of the axis width from that row's last
     label, so the labels of a close pair never overlap."""
-    import numpy as np
     from matplotlib.transforms import blended_transform_factory
 
     trans = blended_transform_factory(ax.transData, ax.transAxes)
@@ -265,8 +265,6 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
     -------
     The Axes ``ax`` when given, else ``fig`` (empty) or the new Figure (what it drew on).
     """
-    import numpy as np
-
     w, K, flags, R = _refined(result, resonances if refine else ())
     with np.errstate(all="ignore"):     # (ω in unit, |K|, arg K [deg], |response|, flags)
         curves = in_unit(w, unit), np.abs(K), np.degrees(np.angle(K)), np.abs(R), flags
@@ -279,10 +277,6 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
 
 def _bode_figure(fig, result, curves, resonances, peak, unit: str, extra: dict, title):
     """The panels of :func:`plot_sweep`: |K|, arg K, the response, ``extra``."""
-    import numpy as np
-
-    from .circuit import units_of
-
     units = units_of(getattr(result, "drive", None))
     force_drive = getattr(result.drive, "kind", "velocity") == "force"
     omega, _, phase, absR, _ = curves
@@ -432,10 +426,6 @@ def _light_log_axes(axes, max_minor_decades: float = 3.0) -> None:
 
 def _draw_K(ax, result, curves, resonances, unit: str, mark: bool = False):
     """|K| on ``ax`` with its flagged points and the roots' labels (and lines if ``mark``)."""
-    import numpy as np
-
-    from .circuit import units_of
-
     omega, absK, _, _, flags = curves
     positive = omega > 0
     ax.loglog(omega[positive], absK[positive], color="C0")
@@ -458,8 +448,6 @@ MAX_CLEARANCE_PANELS, MAX_NODES = 4, 8
 
 def _known(kind: str, names, known) -> list:
     """``names`` (checked against ``known``, a clear error naming them otherwise)."""
-    from .sources import did_you_mean
-
     names = list(names)
     bad = [n for n in names if n not in known]
     if bad:
@@ -550,8 +538,6 @@ def _forces_panel(a, result, forces) -> None:
 
 def _clearance_panel(a, result, name: str, gap: tuple) -> None:
     """A spring's deformation with its clearance band ±B/2 and its contact phases shaded."""
-    import numpy as np
-
     n1, n2, B = gap
     t, u = result.time, result.units
     index = {m: i for i, m in enumerate(result.nodes)}
@@ -597,10 +583,7 @@ def plot_forces(rows, omega: float, name: str = "circuit", title: str | None = N
     -------
     matplotlib.axes.Axes or matplotlib.figure.Figure
     """
-    import numpy as np
     from matplotlib.patches import Patch
-
-    from .circuit import units_of
 
     u = units or units_of(None)
 
@@ -645,10 +628,6 @@ def plot_comparison(comparison, name: str = "circuit", measured: str = "measured
     matplotlib.figure.Figure or matplotlib.figure.SubFigure
         What it drew on: ``fig`` when given (it must be empty), else the new Figure.
     """
-    import numpy as np
-
-    from .circuit import units_of
-
     u = units or units_of(None)
 
     made = fig is None
@@ -716,8 +695,6 @@ def _unit_label(key: str, units) -> str:
 
 def _study_line(ax, ok, bad, p, column, units) -> None:
     """:func:`plot_study` of one parameter ``p``: the column against it, in its order."""
-    import numpy as np
-
     pts = sorted((r[p], r[column]) for r in ok)
     if pts:
         x, y = np.array(pts, dtype=float).T
@@ -732,7 +709,6 @@ def _study_line(ax, ok, bad, p, column, units) -> None:
 def _study_scatter(fig, ax, ok, bad, params, column, units) -> None:
     """:func:`plot_study` of two parameters: a scatter coloured by the column (log colours
     when it spans more than two decades), the failed points as grey crosses."""
-    import numpy as np
     from matplotlib.colors import LogNorm
 
     px, py = params
@@ -769,8 +745,6 @@ def plot_periodic(result, title: str | None = None, *, fig=None):
     matplotlib.figure.Figure or matplotlib.figure.SubFigure
         What it drew on: ``fig`` when given (it must be empty), else the new Figure.
     """
-    import numpy as np
-
     u = result.units
     word = "moment" if u["Q"] == "N·m" else "force"
     made = fig is None
@@ -835,8 +809,6 @@ def plot_speed_map(result, title: str | None = None, *, ax=None, min_weight: flo
     -------
     matplotlib.axes.Axes or matplotlib.figure.Figure
     """
-    import numpy as np
-
     u = result.units
     word = "moment" if u["Q"] == "N·m" else "force"
     fig, ax, made = one_panel(ax, (8, 4.5))
@@ -885,8 +857,6 @@ def plot_mode(mode, name: str = "circuit", title: str | None = None, *, ax=None,
     -------
     matplotlib.axes.Axes or matplotlib.figure.Figure
     """
-    import numpy as np
-
     fig, ax, made = one_panel(ax, (max(5.0, 0.45 * len(mode.shape) + 2), 3.5))
     r = mode.resonance
     at = (f"ω = {r.omega:.6g} rad/s ({r.f_hz:.4g} Hz)" if unit == "rad/s" else

@@ -44,6 +44,7 @@ from typing import Literal
 
 import numpy as np
 
+from . import nodal
 from .circuit import Circuit
 from .errors import InputError, NetlistError, SolverError, UnloadedElementWarning, warn
 from .sources import data_frame, did_you_mean, real_number
@@ -67,6 +68,8 @@ MAX_BAND_ROOTS = 192
 TIE_RTOL = 1e-14
 
 
+#: Machine epsilon of float64, the unit of every error estimate here.
+_EPS = np.finfo(float).eps
 #: The two kinds of root of K: a zero and a pole.
 Kind = Literal["resonance", "antiresonance"]
 
@@ -225,10 +228,8 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
         warn(f"{len(system.unloaded)} element(s) lie on no path between the drive's nodes "
              f"{d.n1!r} and {d.n2!r} and carry no force: {', '.join(system.unloaded)}",
              UnloadedElementWarning)
-    from .nodal import DENSE_LIMIT
-
     # Small networks: dense matrices from the stamps, and no scipy for undamped ones.
-    M, D, Ks, G_released, G_held, damped = pencil(system, dense=system.size <= DENSE_LIMIT)
+    M, D, Ks, G_released, G_held, damped = pencil(system, dense=system.size <= nodal.DENSE_LIMIT)
     held, v_held, released, v_released, keep_h, keep_r = _solved(
         M, D, Ks, G_released, G_held, damped, omega_max, vectors)
     pairs = []          # ((kind, s, error, must polish), (vector, repeated)) of each root
@@ -242,9 +243,8 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
     pairs = [(t, v) for t, v in pairs if (kind is None or t[0] == kind) and
              (omega_max is None or abs(t[1]) <= omega_max * (1 + 1e-6))]
     roots = [t for t, _ in pairs]
-    out = list(zip(_polish(system, roots, damped), [v for _, v in pairs])) if roots else []
-    if omega_max is not None:
-        out = [(r, v) for r, v in out if r.omega <= omega_max]
+    out = [(r, v) for r, v in zip(_polish(system, roots, damped), [x for _, x in pairs])
+           if omega_max is None or r.omega <= omega_max] if roots else []
     out = sorted(out, key=lambda rv: (rv[0].omega, rv[0].kind))
     ties = tie_order(np.array([[r.kind == "antiresonance" for r, _ in out]], bool),
                      np.array([[r.omega for r, _ in out]], float))[0]
@@ -319,12 +319,11 @@ def _secular_held(V, released: np.ndarray, g: np.ndarray) -> tuple | None:
     """
     from scipy.linalg.lapack import dlasd4
 
-    eps = np.finfo(float).eps
     top = np.abs(released[:, 0]).max(initial=0.0)
     w = np.abs(released[:, 0]) / top                # ω/ω_max: dlasd4's singular values
     c = V.T @ g
     live = np.abs(c) > 1e-13 * np.linalg.norm(c)  # cᵢ = 0: a mode the drive does not see
-    first = np.r_[True, np.diff(w[live] ** 2) > 8 * eps]
+    first = np.r_[True, np.diff(w[live] ** 2) > 8 * _EPS]
     cluster = np.cumsum(first) - 1
     z = np.sqrt(np.bincount(cluster, c[live] ** 2) / np.sum(c[live] ** 2))
     found = [dlasd4(i, w[live][first], z, rho=np.inf) for i in range(cluster[-1])]
@@ -346,7 +345,7 @@ def _secular_held(V, released: np.ndarray, g: np.ndarray) -> tuple | None:
         Y = V[:, live] @ (c[live, None] / gaps[cluster])
         t = (g @ Y) / (g @ g)
         tilt = np.abs(t) * np.linalg.norm(g) / np.linalg.norm(Y, axis=0)
-    if not np.all(tilt <= 64 * eps):
+    if not np.all(tilt <= 64 * _EPS):
         return None
     out = np.zeros((V.shape[0], w.size))
     out[:, keep[0]] = Y - np.outer(g, t)        # onto the constraint (v_a = 0 when b is 0)
@@ -423,7 +422,7 @@ def constraint_basis(G: np.ndarray, n: int, dense: bool = False):
     # G_p v_p + G_f v_f = 0  ->  v_p = -G_p⁺ G_f v_f (exact for consistent constraints)
     Gp, Gf = G[:, pivots], G[:, free]
     # rcond: scipy's lstsq default (eps), which this used before.
-    elim = -np.linalg.lstsq(Gp, Gf, rcond=np.finfo(float).eps)[0] if free.size \
+    elim = -np.linalg.lstsq(Gp, Gf, rcond=_EPS)[0] if free.size \
         else np.zeros((rank, 0))
     rows, cols = np.nonzero(elim)
     r = np.concatenate([free, pivots[rows]])
@@ -501,13 +500,12 @@ def _rounding_factor(n: int) -> float:
 
 def _undamped_roots(M, K, w_ref: float, vectors: bool):
     """``(s, error, must polish, vectors)`` of the scaled undamped pencil (λ = (ω/w_ref)²)."""
-    eps = np.finfo(float).eps
     lam, direct, U = _undamped(M, K, vectors)
     factor = _rounding_factor(lam.size)
     up = lam > 1e-11 * max(1.0, lam.max(initial=0.0))
     lam, U = lam[up], (U[:, up] if vectors and not up.all() else U)
     s = 1j * w_ref * np.sqrt(lam)
-    err = eps * (lam.max(initial=1.0) / lam) * factor
+    err = _EPS * (lam.max(initial=1.0) / lam) * factor
     # Weyl's bound holds for the scaled matrix, not through a static
     # condensation or an eigen-decomposition of M (their rounding is
     # amplified by the condition of the condensed block): not a bound
@@ -518,14 +516,13 @@ def _undamped_roots(M, K, w_ref: float, vectors: bool):
 def _damped_roots(scaled: tuple[np.ndarray, np.ndarray, np.ndarray], w_ref: float,
                   vectors: bool):
     """``(s, error, vectors)`` of the scaled damped pencil, rigid-body roots left out."""
-    eps = np.finfo(float).eps
     s_all, U = _damped(*scaled, vectors=vectors)
     s_all = s_all * w_ref
     # Rigid-body (zero) roots come out of QZ split by about sqrt(eps)·w_ref.
     keep = np.flatnonzero((np.abs(s_all) > 1e-6 * w_ref) & (s_all.imag >= -1e-12 * np.abs(s_all)))
     s, U = s_all[keep], U[:, keep] if vectors else None
     mag = np.abs(s)
-    err = eps * 1e2 * (mag.max(initial=1.0) / mag)
+    err = _EPS * 1e2 * (mag.max(initial=1.0) / mag)
     if s.size > 1 or s_all.size > 1:
         # Coalescing roots (critical damping, ζ → 1): a root at relative
         # distance δ from another moves by about eps/δ, and a double root
@@ -533,7 +530,7 @@ def _damped_roots(scaled: tuple[np.ndarray, np.ndarray, np.ndarray], w_ref: floa
         gap = np.abs(s[:, None] - s_all[None, :])
         gap[np.arange(s.size), keep] = np.inf
         with np.errstate(divide="ignore"):
-            near = np.minimum(np.sqrt(eps), eps / (gap.min(axis=1) / mag))
+            near = np.minimum(np.sqrt(_EPS), _EPS / (gap.min(axis=1) / mag))
         err = np.maximum(err, 10 * near)
     s = np.where(np.abs(s.imag) <= 1e-12 * np.abs(s), s.real + 0j, s)
     return s, err, U
@@ -705,7 +702,7 @@ def _undamped(M: np.ndarray, K: np.ndarray, vectors: bool = False) -> tuple:
     else:
         R, N = V[:, massive], V[:, ~massive]
         Krr, Knn, Knr = R.T @ K @ R, N.T @ K @ N, N.T @ K @ R
-    X = np.linalg.lstsq(Knn, Knr, rcond=np.finfo(float).eps)[0] if Knn.size else np.zeros((0, Krr.shape[0]))
+    X = np.linalg.lstsq(Knn, Knr, rcond=_EPS)[0] if Knn.size else np.zeros((0, Krr.shape[0]))
     Kc = Krr - Knr.T @ X if Knn.size else Krr
     # Symmetric scaling by the masses gives a standard symmetric eigenproblem.
     d = 1.0 / np.sqrt(mu[massive])
@@ -832,7 +829,6 @@ def _polish(system, roots: list, damped: bool) -> list[Resonance]:
     secant does not confirm (it leaves for another root) keeps its
     eigen-solver value and estimate.
     """
-    eps = np.finfo(float).eps
     kinds = [k for k, _, _, _ in roots]
     s0 = np.array([complex(s) for _, s, _, _ in roots])
     e0 = np.array([float(np.real(e)) for _, _, e, _ in roots])
@@ -844,7 +840,7 @@ def _polish(system, roots: list, damped: bool) -> list[Resonance]:
         s_new[todo], e_new[todo] = secant_polish(lambda x: _g_and_delta(system, x, pole),
                                                  s0[todo], e0[todo], damped)
     s_new = settled(s_new, e_new, damped)
-    return [_make(k, s, max(e, eps)) for k, s, e in zip(kinds, s_new, e_new)]
+    return [_make(k, s, max(e, _EPS)) for k, s, e in zip(kinds, s_new, e_new)]
 
 
 def settled(s: np.ndarray, err: np.ndarray, damped: bool) -> np.ndarray:
@@ -856,8 +852,6 @@ def settled(s: np.ndarray, err: np.ndarray, damped: bool) -> np.ndarray:
 
 def _g_and_delta(system, s: np.ndarray, pole: np.ndarray):
     """g(s) (K, or 1/K at anti-resonances) and its absolute rounding uncertainty."""
-    from . import nodal
-
     # Anti-resonances on the held system (built once per system): 1/K = −q there, and A
     # is singular at the root while the held matrix is not.
     systems = (system, system.memo("_held", lambda: nodal.held(system)))
@@ -871,13 +865,12 @@ def g_and_bound(pole: np.ndarray, evaluate, live: np.ndarray):
     the network, 1: held) among the ``live`` ones (the others NaN, not evaluated: a
     secant step leaves its converged roots out).  The refined value is good to about eps
     relative at best (its rounding to float64), whatever the estimate of the solve says."""
-    eps = np.finfo(float).eps
     g, dg = np.full(pole.shape, np.nan, dtype=complex), np.full(pole.shape, np.inf)
     for i, want in enumerate((~pole & live, pole & live)):
         if want.any():
             K, dK = evaluate(i, want)
             g[want] = -K if i else K
-            dg[want] = 4 * np.maximum(dK, eps * np.abs(K))
+            dg[want] = 4 * np.maximum(dK, _EPS * np.abs(K))
     return g, dg
 
 
@@ -894,7 +887,6 @@ def secant_steps(g_and_delta, admissible, s0, e0, offset, active=True, iteration
     below 10 Newton steps |g/g'| at ``s0`` (how far the circuit's own K says the
     root is).
     """
-    eps = np.finfo(float).eps
     h = np.maximum(np.abs(s0) * np.maximum(e0, 1e-9), 1e-300)
     a, b = s0 - h * offset, s0.copy()
     ga, _ = g_and_delta(a)
@@ -922,7 +914,7 @@ def secant_steps(g_and_delta, admissible, s0, e0, offset, active=True, iteration
         a, ga = np.where(ok, b, a), np.where(ok, gb, ga)
         b, gb, db = np.where(ok, c, b), np.where(ok, gc, gb), np.where(ok, dc, db)
         with np.errstate(all="ignore"):
-            done = step <= np.maximum(4 * eps * np.abs(b), db / np.abs(slope))
+            done = step <= np.maximum(4 * _EPS * np.abs(b), db / np.abs(slope))
         active = ok & ~done
     with np.errstate(all="ignore"):
         err = (db / np.abs(slope) + step) / np.abs(b)
@@ -930,7 +922,7 @@ def secant_steps(g_and_delta, admissible, s0, e0, offset, active=True, iteration
         newton = np.abs(g0 / slope0) / np.abs(s0)
     bad = ~np.isfinite(err) | ~np.isfinite(b) | (moved > 1e-3)
     newton = np.where(np.isfinite(newton), 10 * newton, 0.0)
-    return np.where(bad, s0, b), np.where(bad, np.maximum(e0, newton), np.maximum(err, eps))
+    return np.where(bad, s0, b), np.where(bad, np.maximum(e0, newton), np.maximum(err, _EPS))
 
 
 def secant_polish(g_and_delta, s0: np.ndarray, e0: np.ndarray, damped: bool):
@@ -1003,7 +995,7 @@ def batched_roots(ds, omega_max: float | None = None):
     w, err = _secant_designs(ds.plan(which[keep]), s, pole, err)
     if omega_max is not None:
         w = np.where(w <= omega_max, w, np.nan)
-    return (which[keep], *sorted_roots(pole, 1j * w, np.maximum(err, np.finfo(float).eps)))
+    return (which[keep], *sorted_roots(pole, 1j * w, np.maximum(err, _EPS)))
 
 
 def template_levers(ds, system, which: np.ndarray) -> np.ndarray:
@@ -1031,7 +1023,7 @@ def shared_roots_free(problems, damped: bool) -> np.ndarray:
     # (eps·1e2·|s|max/|s|), as find_resonances compares them before polishing.
     with np.errstate(all="ignore"):
         if damped:
-            e_h, e_r = (np.maximum(e, 1e2 * np.finfo(float).eps * np.nanmax(
+            e_h, e_r = (np.maximum(e, 1e2 * _EPS * np.nanmax(
                 np.abs(x), axis=1, initial=1.0)[:, None] / np.abs(x))
                 for e, x in ((e_h, w_h), (e_r, w_r)))
         close = np.abs(w_r[:, None, :] - w_h[:, :, None]) / np.abs(w_h[:, :, None]) < \
@@ -1045,13 +1037,11 @@ def element_patterns(system) -> dict[str, np.ndarray]:
     M = Σ_e (value·η)_e B_e (the entries :func:`mechcirc.nodal.stamps` gives
     and :func:`mechcirc.nodal.assemble` sums); projected, Zᵀ M Z = Σ_e s_e Zᵀ B_e Z.
     """
-    from .nodal import stamps
-
     n_nodes = len(system.nodes)
     index = {n: i for i, n in enumerate(system.nodes)}   # a node not in it: the reference
     E, pos = len(system.elements), {e.name: k for k, e in enumerate(system.elements)}
     B = {x: np.zeros((E, n_nodes, n_nodes)) for x in ("mass", "spring", "damper")}
-    for kind, r, c, sign, source, _ in stamps(system.elements, (), index):
+    for kind, r, c, sign, source, _ in nodal.stamps(system.elements, (), index):
         if kind in B:
             B[kind][pos[source.name], r, c] += sign
     return B
@@ -1060,20 +1050,21 @@ def element_patterns(system) -> dict[str, np.ndarray]:
 def stacked_problem(Z, B, S, damped: bool, omega_max):
     """The roots of one stacked eigenproblem (constraint basis ``Z``, patterns ``B``,
     element values ``S`` per design): :func:`_stacked_damped` or :func:`_stacked_modes`."""
+    if not Z.shape[1]:                      # nothing left to move: no roots, solved
+        D = S.shape[0]
+        return np.zeros((D, 0), complex if damped else float), np.zeros((D, 0)), \
+            np.ones(D, dtype=bool)
     if damped:
         Mr, Dr, Kr = (_weighted_sum(S, Z.T @ B[x] @ Z) for x in ("mass", "damper", "spring"))
         return _stacked_damped(Mr, Dr, Kr, omega_max)
     # The massless directions are those of the pattern: with every value > 0,
     # null(Σ m_e B_e) = ∩ null(B_e) in every design.  Ordered last, they are
     # condensed out statically (_undamped_stack), as _undamped does per design.
-    n0 = 0
-    if Z.shape[1]:
-        mu, V = np.linalg.eigh(Z.T @ B["mass"].sum(axis=0) @ Z)
-        massless = mu <= 1e-10 * max(mu.max(), 1e-300)
-        Z = Z @ np.concatenate([V[:, ~massless], V[:, massless]], axis=1)
-        n0 = int(massless.sum())
+    mu, V = np.linalg.eigh(Z.T @ B["mass"].sum(axis=0) @ Z)
+    massless = mu <= 1e-10 * max(mu.max(), 1e-300)
+    Z = Z @ np.concatenate([V[:, ~massless], V[:, massless]], axis=1)
     Mr, Kr = (_weighted_sum(S, Z.T @ B[x] @ Z) for x in ("mass", "spring"))
-    return _stacked_modes(Mr, Kr, n0, omega_max)
+    return _stacked_modes(Mr, Kr, int(massless.sum()), omega_max)
 
 
 def held_and_released(s_h, s_r, err_h, err_r) -> tuple:
@@ -1151,19 +1142,17 @@ def _stacked_modes(M: np.ndarray, K: np.ndarray, n0: int, omega_max):
     matrix that is singular to within 1e-13 of its largest eigenvalue, where
     :func:`_undamped` condenses, or values beyond float64's range).
     """
-    D, k = M.shape[0], M.shape[1]
-    if k == 0:
-        return np.zeros((D, 0)), np.zeros((D, 0)), np.ones(D, dtype=bool)
     scale_m, w_ref, Ms, Ks, ok = _scaled_stack(M, K)
     lam, regular = _undamped_stack(Ms, Ks, n0)
     ok &= regular
     lam = np.where(np.isfinite(lam), lam, -np.inf)
     top = np.maximum(1.0, lam.max(axis=1, initial=0.0))
-    live, eps = (lam > 1e-11 * top[:, None]) & ok[:, None], np.finfo(float).eps
+    live = (lam > 1e-11 * top[:, None]) & ok[:, None]
+    lam = np.where(live, lam, 1.0)
     with np.errstate(all="ignore"):
-        w = np.where(live, w_ref[:, None] * np.sqrt(np.where(live, lam, 1.0)), np.nan)
-        err = np.where(live, eps * (np.where(live, lam, 1.0).max(axis=1, initial=1.0)[:, None]
-                                    / np.where(live, lam, 1.0)) * _rounding_factor(k), np.nan)
+        w = np.where(live, w_ref[:, None] * np.sqrt(lam), np.nan)
+        err = np.where(live, _EPS * (lam.max(axis=1, initial=1.0)[:, None] / lam)
+                       * _rounding_factor(M.shape[1]), np.nan)
     if omega_max is not None:
         beyond = w > omega_max * (1 + 1e-6)
         w[beyond] = err[beyond] = np.nan
@@ -1186,9 +1175,6 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
     no root (s with Im s ≥ 0, |s| > 0).
     """
     n, k = M.shape[0], M.shape[1]
-    eps = np.finfo(float).eps
-    if k == 0:
-        return np.zeros((n, 0), dtype=complex), np.zeros((n, 0)), np.ones(n, dtype=bool)
     scale_m, w_ref, Ms, Ks, ok = _scaled_stack(M, K)
     with np.errstate(all="ignore"):
         Ds = Dm / (scale_m * w_ref)[:, None, None]
@@ -1210,7 +1196,7 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
     with np.errstate(all="ignore"):
         gap = np.abs(sig[:, :, None] - sig[:, None, :])
         gap[:, np.arange(2 * k), np.arange(2 * k)] = np.inf
-        near = np.minimum(np.sqrt(eps), eps / (gap.min(axis=2) / mag))
+        near = np.minimum(np.sqrt(_EPS), _EPS / (gap.min(axis=2) / mag))
     sig, step = _newton_det(np.where(live, sig, 1.0 + 0j), live, Ms, Ds, Ks)
     mag = np.abs(sig)
     with np.errstate(all="ignore"):
@@ -1218,7 +1204,7 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
         # the eigen-solver's own estimate (_modes's eps·1e2·|s|max/|s|):
         # measured 1.5e-13 on a slow overdamped root (tests/test_batch.py).
         top = np.where(live, mag, 0.0).max(axis=1, initial=1.0)[:, None]
-        err = np.maximum(np.maximum(step / mag, 1e2 * eps * top / mag), 10 * near)
+        err = np.maximum(np.maximum(step / mag, 1e2 * _EPS * top / mag), 10 * near)
     s, err = np.where(live, sig * w_ref[:, None], np.nan), np.where(live, err, np.nan)
     s = np.where(np.abs(s.imag) <= err * np.abs(s), s.real + 0j, s)
     if omega_max is not None:
@@ -1314,8 +1300,7 @@ def _undamped_stack(M: np.ndarray, K: np.ndarray, n0: int):
     A = Linv @ Kc @ np.swapaxes(Linv, 1, 2)
     A += np.swapaxes(A, 1, 2)
     A *= 0.5
-    lam = np.linalg.eigvalsh(A)
-    return np.where(regular[:, None], lam, np.nan), regular
+    return np.where(regular[:, None], np.linalg.eigvalsh(A), np.nan), regular
 
 
 def _secant_designs(p, w0: np.ndarray, pole: np.ndarray, e0: np.ndarray):
@@ -1330,7 +1315,7 @@ def _secant_designs(p, w0: np.ndarray, pole: np.ndarray, e0: np.ndarray):
     from ._tree_eval import through_reciprocal
     from .reduction import evaluate_designs
 
-    eps, have = np.finfo(float).eps, np.isfinite(w0)
+    have = np.isfinite(w0)
     w_safe = np.where(have, w0, 1.0)
 
     def g_and_delta(w):
@@ -1339,8 +1324,8 @@ def _secant_designs(p, w0: np.ndarray, pole: np.ndarray, e0: np.ndarray):
             X = K.imag
             g = np.where(pole, -1.0 / X, X)
             # g = −1/X: the tree's reciprocal rule, and the division's rounding (4u)
-            rho = np.where(pole, through_reciprocal(rho) + 4 * eps / 2, rho)
-            dg = 4 * np.maximum(rho * np.abs(g), eps * np.abs(g))
+            rho = np.where(pole, through_reciprocal(rho) + 4 * _EPS / 2, rho)
+            dg = 4 * np.maximum(rho * np.abs(g), _EPS * np.abs(g))
         return g, dg
 
     w, err = secant_steps(g_and_delta, lambda c: (c, np.isfinite(c) & (c > 0)), w_safe,

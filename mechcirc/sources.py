@@ -52,24 +52,21 @@ def read_bytes(path: str | os.PathLike, expected: str) -> bytes:
         too large.
     """
     source = os.fspath(path)
-    try:
+    try:                # (the checks' NetlistErrors are no OSError: they pass through)
         info = os.stat(source)
-    except FileNotFoundError:
-        raise NetlistError("no such file", source, 0, 0, f"the path of {expected}") from None
-    except OSError as exc:
-        raise NetlistError(f"cannot read: {exc.strerror}", source) from None
-    if stat.S_ISDIR(info.st_mode):
-        raise NetlistError("is a directory", source, 0, 0, f"{expected} file") from None
-    if not stat.S_ISREG(info.st_mode):
-        raise NetlistError("is not a regular file (a device, pipe or socket); nothing was read",
-                           source, 0, 0, f"{expected} file")
-    if info.st_size > MAX_INPUT_BYTES:
-        raise NetlistError(f"is {info.st_size:,} bytes, more than the limit of "
-                           f"{MAX_INPUT_BYTES:,} bytes; nothing was read", source, 0, 0,
-                           f"{expected} file")
-    try:
+        if stat.S_ISDIR(info.st_mode):
+            raise NetlistError("is a directory", source, 0, 0, f"{expected} file")
+        if not stat.S_ISREG(info.st_mode):
+            raise NetlistError("is not a regular file (a device, pipe or socket); nothing was "
+                               "read", source, 0, 0, f"{expected} file")
+        if info.st_size > MAX_INPUT_BYTES:
+            raise NetlistError(f"is {info.st_size:,} bytes, more than the limit of "
+                               f"{MAX_INPUT_BYTES:,} bytes; nothing was read", source, 0, 0,
+                               f"{expected} file")
         with open(source, "rb") as fh:
             data = fh.read(MAX_INPUT_BYTES + 1)
+    except FileNotFoundError:
+        raise NetlistError("no such file", source, 0, 0, f"the path of {expected}") from None
     except OSError as exc:
         raise NetlistError(f"cannot read: {exc.strerror}", source) from None
     if len(data) > MAX_INPUT_BYTES:
@@ -339,10 +336,7 @@ def number_error(value, what: str, *, positive: bool = False,
     -------
     tuple of (str, str) or None
     """
-    ok = finite_number(value)
-    if ok and positive:
-        ok = value > 0 or (allow_zero and value == 0)
-    if ok:
+    if finite_number(value) and (not positive or value > 0 or allow_zero and value == 0):
         return None
     need = "a finite number" + ("" if not positive else " ≥ 0" if allow_zero else " > 0")
     return f"{what} must be {need}, got {brief(value)}", need
@@ -403,19 +397,16 @@ def summary_repr(result) -> str:
     -------
     str
     """
-    parts = []
-    for f in fields(result):
-        if f.repr:
-            value = getattr(result, f.name)
-            shape = "×".join(map(str, getattr(value, "shape", ())))
-            if shape:
-                text = f"<array {shape}>"
-            elif isinstance(value, (tuple, list)) and len(value) > 8:
-                text = f"<{type(value).__name__} of {len(value)}>"
-            else:
-                text = brief(value)
-            parts.append(f"{f.name}={text}")
-    return f"{type(result).__name__}({', '.join(parts)})"
+    shown = (f"{f.name}={_summary(getattr(result, f.name))}" for f in fields(result) if f.repr)
+    return f"{type(result).__name__}({', '.join(shown)})"
+
+
+def _summary(value) -> str:
+    """One field of :func:`summary_repr`: an array's shape, a long tuple's or list's
+    length, else :func:`brief`."""
+    shape = "×".join(map(str, getattr(value, "shape", ())))
+    return f"<array {shape}>" if shape else f"<{type(value).__name__} of {len(value)}>" \
+        if isinstance(value, (tuple, list)) and len(value) > 8 else brief(value)
 
 
 def data_frame(rows, units: dict[str, str]):

@@ -36,7 +36,7 @@ import math
 import re
 from dataclasses import dataclass
 
-from .errors import UnitError
+from .errors import UnitError, did_you_mean
 
 __all__ = ["Unit", "UnitError", "ATOMS", "PREFIXES", "PREFIXABLE", "ROLES", "parse_unit",
            "looks_like_unit", "convert", "parse_quantity", "split_quantity", "is_bare_number", "parse_omega",
@@ -205,8 +205,6 @@ def parse_unit(text: str) -> Unit:
         atom = m.group(1)
         found = _atom(atom)
         if found is None:
-            from .sources import did_you_mean
-
             raise UnitError(f"unknown unit {atom!r}{did_you_mean(atom, ATOMS)}", i,
                             f"one of {known}")
         power = int(m.group(2)) if m.group(2) else 2 if m.group(3) else 3 if m.group(4) else 1
@@ -300,8 +298,6 @@ def convert_frequency(value, from_unit: str = "rad/s", to_unit: str = "rad/s"):
     try:
         (_, a), (_, b) = FREQUENCY_UNITS[from_unit], FREQUENCY_UNITS[to_unit]
     except KeyError:
-        from .sources import did_you_mean
-
         bad = to_unit if from_unit in FREQUENCY_UNITS else from_unit
         raise UnitError(f"unknown frequency unit {bad!r}{did_you_mean(str(bad), FREQUENCY_UNITS)}",
                         0, "rad/s, Hz or rpm") from None
@@ -427,10 +423,8 @@ def parse_quantity(text: str, role: str | None = None, *, what: str = "value") -
         try:
             u = parse_unit(unit)
         except UnitError as exc:
-            hint = exc.expected
-            if unit.lower() in SPICE_SUFFIXES:
-                hint = (f"no SPICE suffixes in mechcirc: write {number}e3 for {number}k, "
-                        f"or a unit such as {number} kN/m")
+            hint = (f"no SPICE suffixes in mechcirc: write {number}e3 for {number}k, or a unit "
+                    f"such as {number} kN/m") if unit.lower() in SPICE_SUFFIXES else exc.expected
             raise UnitError(exc.message, text.index(unit) + exc.offset, hint) from None
     try:
         return convert(value, u, role or "")

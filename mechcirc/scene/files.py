@@ -845,8 +845,7 @@ def _parts(scene: Scene) -> tuple:
 def gear_meshes(scene: Scene) -> list[tuple]:
     """Rigid gear meshes as (body, first crank, ratio): the body turns at ratio × the first
     crank (the geared crank itself, or the gear beyond its mesh stiffness)."""
-    first = scene.linkage.cranks[0].link
-    return [(g.body or g.crank, first, g.ratio) for g in scene.gears]
+    return [(g.body or g.crank, scene.linkage.cranks[0].link, g.ratio) for g in scene.gears]
 
 
 def _rigid_parts(lk, bodies: dict, tbodies: set, meshes=()) -> list[tuple]:
@@ -888,8 +887,7 @@ def load_scene(path: str | Path) -> Scene:
     NetlistError
         The file is missing or unreadable, or has an error.
     """
-    text = read_source(path, "a scene .toml")
-    return parse_scene(text, os.fspath(path))
+    return parse_scene(read_source(path, "a scene .toml"), os.fspath(path))
 
 
 #: By the kind of element NAME is: the Scene field holding it, and what

@@ -353,8 +353,7 @@ class _Builder:
                     continue
                 node, what = self.node_of_point(ms.point), f"|v_{ms.point}|/v_drive"
             else:
-                node = self.node_of_part[self.part_of_body[ms.link]]
-                what = f"ω_{ms.link}/v_drive"
+                node, what = self.node_of_part[self.part_of_body[ms.link]], f"ω_{ms.link}/v_drive"
             r, size = (float(x) for x in self.found[ms.name])
             self.ratios[ms.name] = r
             if size <= m.tiny:
@@ -475,14 +474,13 @@ def part_singular_values(scene: Scene, part, m: _Motion):
     origin = {b: m.pos[bodies[b][0]] for b in part}
     rows = []
 
-    def row(*entries):        # (body, sign, x-y coefficients or None, φ coefficient)
+    def row(*entries):        # (moving body, sign, x-y coefficients or None, φ coefficient)
         r = np.zeros(shape)
         for body, sign, xy, turn in entries:
-            if body != "ground":
-                j = cols[body]
-                if xy is not None:
-                    r[..., j:j + 2] += sign * xy
-                r[..., j + 2] += sign * turn
+            j = cols[body]
+            if xy is not None:
+                r[..., j:j + 2] += sign * xy
+            r[..., j + 2] += sign * turn
         rows.append(r)
 
     for p in sorted({p for b in part for p in bodies[b]}):
