@@ -198,8 +198,9 @@ def _postorder_values(root, omega, track: bool, keep: bool, checked: bool, desig
         stack.append(val)
         if keep:
             values[id(node)] = val
-    return (stack[-1] if stack else _leaf_value(root.element, omega, inv_omega, track,
-                                                designs)), values
+    top = stack[-1] if stack else _leaf_value(root.element, omega, inv_omega, track,
+                                              designs)
+    return top, values
 
 
 #: root -> its internal nodes in postorder, each ``(node, is a lever, its number of
@@ -620,9 +621,12 @@ def _leaf_value(e: Element, omega, inv_omega, track: bool = False,
                 designs: tuple | None = None) -> _Value:
     """K of a leaf standing alone (the root, or under a lever)."""
     real, inv, om = law_terms(e.kind, _scaled(e, designs))
-    power = LAWS[e.kind].power          # K = j·inv/ω, j·om·ω or real
-    v = _Value(power != 0, inv_omega * inv if power < 0 else omega * om if power > 0
-               else np.full(omega.shape, real, dtype=complex))
+    if LAWS[e.kind].power < 0:
+        v = _Value(True, inv_omega * inv)
+    elif LAWS[e.kind].power > 0:
+        v = _Value(True, omega * om)
+    else:
+        v = _Value(False, np.full(omega.shape, real, dtype=complex))
     if track:
         v.mag = np.abs(v.array)
         v.rho = 4 * _U      # value·η, 1/s, 1/ω and the product

@@ -405,8 +405,11 @@ def _summary(value) -> str:
     """One field of :func:`summary_repr`: an array's shape, a long tuple's or list's
     length, else :func:`brief`."""
     shape = "×".join(map(str, getattr(value, "shape", ())))
-    return f"<array {shape}>" if shape else f"<{type(value).__name__} of {len(value)}>" \
-        if isinstance(value, (tuple, list)) and len(value) > 8 else brief(value)
+    if shape:
+        return f"<array {shape}>"
+    if isinstance(value, (tuple, list)) and len(value) > 8:
+        return f"<{type(value).__name__} of {len(value)}>"
+    return brief(value)
 
 
 def data_frame(rows, units: dict[str, str]):

@@ -423,8 +423,10 @@ def parse_quantity(text: str, role: str | None = None, *, what: str = "value") -
         try:
             u = parse_unit(unit)
         except UnitError as exc:
-            hint = (f"no SPICE suffixes in mechcirc: write {number}e3 for {number}k, or a unit "
-                    f"such as {number} kN/m") if unit.lower() in SPICE_SUFFIXES else exc.expected
+            hint = exc.expected
+            if unit.lower() in SPICE_SUFFIXES:
+                hint = (f"no SPICE suffixes in mechcirc: write {number}e3 for {number}k, "
+                        f"or a unit such as {number} kN/m")
             raise UnitError(exc.message, text.index(unit) + exc.offset, hint) from None
     try:
         return convert(value, u, role or "")

@@ -353,7 +353,8 @@ class _Builder:
                     continue
                 node, what = self.node_of_point(ms.point), f"|v_{ms.point}|/v_drive"
             else:
-                node, what = self.node_of_part[self.part_of_body[ms.link]], f"ω_{ms.link}/v_drive"
+                node = self.node_of_part[self.part_of_body[ms.link]]
+                what = f"ω_{ms.link}/v_drive"
             r, size = (float(x) for x in self.found[ms.name])
             self.ratios[ms.name] = r
             if size <= m.tiny:
