@@ -54,9 +54,7 @@ class Pattern:
         c = [np.asarray(system.stamps[k][1], dtype=np.int64) for k in KINDS]
         v = [np.asarray(system.stamps[k][2], dtype=float) for k in KINDS]
         # The lever block's stamps (KINDS' last; the held drive's constraint included).
-        self.s_row = r[-1]
-        self.s_col = c[-1]
-        self.s_val = v[-1]
+        self.s_row, self.s_col, self.s_val = r[-1], c[-1], v[-1]     # the lever stamps
         rows, cols = np.concatenate(r), np.concatenate(c)
         ends = list(accumulate([len(x) for x in r], initial=0))  # each kind's stamps, in order
         self.n = n
