@@ -428,8 +428,8 @@ class Linkage(Memos):
 
 # ------------------------------------------------------------------ parsing
 # The located-TOML helpers are shared with the scene and study readers.
-from ..sources import Table, check_keys, load_toml  # noqa: E402
-from ..sources import brief, finite_number, locate, located, read_source, real_values  # noqa: E402
+from ..sources import (Table, brief, check_keys, did_you_mean, finite_number,  # noqa: E402
+                       load_toml, locate, located, read_source, real_values)
 from ..units import in_si  # noqa: E402
 
 #: The tables of a linkage file, declared once (see :class:`mechcirc.sources.Table`);
@@ -554,8 +554,6 @@ def _read_links(table: dict, pose: dict, text: str, source: str,
         least = 1 if lname in sliders else 2
         if not isinstance(pts, list) or len(pts) < least or \
                 not all(isinstance(p, str) for p in pts):
-            from ..sources import did_you_mean
-
             stray = sorted(s for s in sliders if s not in table)   # a slider's misspelt link
             why = (f"; [[sliders]] names {stray[0]!r}, which is no link"
                    f"{did_you_mean(stray[0], table)}") if stray and least == 2 else ""
