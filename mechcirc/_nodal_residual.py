@@ -54,9 +54,7 @@ class Pattern:
         c = [np.asarray(system.stamps[k][1], dtype=np.int64) for k in KINDS]
         v = [np.asarray(system.stamps[k][2], dtype=float) for k in KINDS]
         # The lever block's stamps (KINDS' last; the held drive's constraint included).
-        self.s_row = r[-1]
-        self.s_col = c[-1]
-        self.s_val = v[-1]
+        self.s_row, self.s_col, self.s_val = r[-1], c[-1], v[-1]     # the lever stamps
         rows, cols = np.concatenate(r), np.concatenate(c)
         ends = list(accumulate([len(x) for x in r], initial=0))  # each kind's stamps, in order
         self.n = n
@@ -222,11 +220,9 @@ class Pattern:
             # would leave a low part far above u|d|, and every later sum of
             # low parts would round at u²|x| per row instead of u²|y d|.
             d_h, d_l = two_sum(d_h, d_l + (xle[:, self.e_i] - xle[:, self.e_j]))
-        vh, vl = self.e_vs
-        p_h, p_l = two_prod(self.e_val, vh, vl, d_h)
+        p_h, p_l = two_prod(self.e_val, *self.e_vs, d_h)
         p_l = p_l + self.e_val * d_l
-        sh, sl = self.s_vs
-        q_h, q_l = two_prod(self.s_val, sh, sl, xs)
+        q_h, q_l = two_prod(self.s_val, *self.s_vs, xs)
         if xl is not None:
             q_l = q_l + self.s_val * xle[:, self.s_col]
         T_h = np.concatenate([p_h, -p_h, q_h], axis=1)

@@ -79,8 +79,7 @@ class DDSolver:
     kind = "dd"
 
     def __init__(self, system: NodalSystem):
-        n = system.size
-        self.n = n
+        self.n = n = system.size
         # About 2¹⁹ matrix entries per batch (some 30 temporaries of that size).
         self.max_chunk = max(1, min(64, 2 ** 19 // max(1, n * n)))
         self.parts = []

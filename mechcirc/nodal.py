@@ -506,13 +506,9 @@ def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
                 e = xla + e
         if whole:
             # Every point: the new arrays (each its own) are kept, not copied.
-            xh = s
-            xl = e
-            prev = d
+            xh, xl, prev = s, e, d
         else:
-            xh[at] = s
-            xl[at] = e
-            prev[at] = d
+            xh[at], xl[at], prev[at] = s, e, d
         # est bounds the error before this correction; after it, the error is
         # smaller still (by the contraction): stop once est is near rounding.
         active = active[est[active] > 16 * eps]

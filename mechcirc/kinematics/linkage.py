@@ -155,6 +155,29 @@ class AssurGroup:
         return len(self.external_pairs)
 
 
+def _next_group(joints, known, remaining):
+    """The smallest set S of the ``remaining`` links with 3·|S| = 2·(pairs among S and the
+    ``known`` bodies), as (links, inner pairs, outer pairs); None if there is none."""
+    for size in range(2, len(remaining) + 1, 2):
+        for combo in itertools.combinations(remaining, size):
+            S = set(combo)
+            pairs = 0
+            outer_pairs: list[str] = []
+            inner_pairs: list[str] = []
+            for p, members in joints.items():
+                inside = [m for m in members if m in S]
+                outside = [m for m in members if m in known]
+                if not inside:
+                    continue
+                m = len(inside) + len(outside)
+                if m >= 2:
+                    pairs += m - 1
+                    (outer_pairs if outside else inner_pairs).append(p)
+            if 3 * size == 2 * pairs:
+                return combo, tuple(inner_pairs), tuple(outer_pairs)
+    return None
+
+
 def _rot(phi):
     c, s = math.cos(phi), math.sin(phi)
     return np.array([[c, -s], [s, c]])
@@ -246,27 +269,7 @@ class Linkage(Memos):
         remaining = [l for l in self.links if l not in known]
         groups = []
         while remaining:
-            found = None
-            for size in range(2, len(remaining) + 1, 2):
-                for combo in itertools.combinations(remaining, size):
-                    S = set(combo)
-                    pairs = 0
-                    outer_pairs: list[str] = []
-                    inner_pairs: list[str] = []
-                    for p, members in joints.items():
-                        inside = [m for m in members if m in S]
-                        outside = [m for m in members if m in known]
-                        if not inside:
-                            continue
-                        m = len(inside) + len(outside)
-                        if m >= 2:
-                            pairs += m - 1
-                            (outer_pairs if outside else inner_pairs).append(p)
-                    if 3 * size == 2 * pairs:
-                        found = (combo, tuple(inner_pairs), tuple(outer_pairs))
-                        break
-                if found:
-                    break
+            found = _next_group(joints, known, remaining)
             if not found:
                 raise GeometryError(f"{self.source}: links {', '.join(remaining)} form no Assur "
                                     f"group on the ground and cranks")
@@ -425,8 +428,8 @@ class Linkage(Memos):
 
 # ------------------------------------------------------------------ parsing
 # The located-TOML helpers are shared with the scene and study readers.
-from ..sources import Table, check_keys, load_toml  # noqa: E402
-from ..sources import brief, finite_number, locate, located, read_source, real_values  # noqa: E402
+from ..sources import (Table, brief, check_keys, did_you_mean, finite_number,  # noqa: E402
+                       load_toml, locate, located, read_source, real_values)
 from ..units import in_si  # noqa: E402
 
 #: The tables of a linkage file, declared once (see :class:`mechcirc.sources.Table`);
@@ -551,8 +554,6 @@ def _read_links(table: dict, pose: dict, text: str, source: str,
         least = 1 if lname in sliders else 2
         if not isinstance(pts, list) or len(pts) < least or \
                 not all(isinstance(p, str) for p in pts):
-            from ..sources import did_you_mean
-
             stray = sorted(s for s in sliders if s not in table)   # a slider's misspelt link
             why = (f"; [[sliders]] names {stray[0]!r}, which is no link"
                    f"{did_you_mean(stray[0], table)}") if stray and least == 2 else ""

@@ -405,8 +405,7 @@ def _dyad(lk, slides, P3, links, o1, o2):
     (P1, K1), (P2, K2) = o1, o2
     x1, scale = lk.pose[P1], lk.length_scale()
     if P3 in slides:                                           # RPR
-        s = slides[P3]
-        u = complex(*s.direction)
+        u = complex(*slides[P3].direction)
         d0 = complex(*(lk.pose[P2] - x1)) / u              # (along, across) u
         if abs(d0.real) <= 1e-9 * scale:
             return None
@@ -415,8 +414,7 @@ def _dyad(lk, slides, P3, links, o1, o2):
     x3 = lk.pose[P3]
     l1 = float(np.hypot(*(x3 - x1)))
     if P2 in slides:                                           # RRP
-        s = slides[P2]
-        u = complex(*s.direction)
+        u = complex(*slides[P2].direction)
         along = complex(*(x3 - x1)) / u
         if l1 == 0 or abs(along.real) <= 1e-9 * l1:
             return None
@@ -938,12 +936,8 @@ def _solve_dyads(lk, pl, t, dt_max, cross=(), zones=()):
     phi, E, r, inner, margin = ds.positions(t, cross)
     # the traversal from the pose must stay assemblable: check the path between
     # the targets too where they are further apart than a continuation step
-    nodes, _ = _path(t, dt_max)
-    if len(nodes) == len(t) + 1:
-        check_t, check_m = t, margin
-    else:
-        check_t = nodes[1:]
-        check_m = ds.positions(check_t, cross)[4]
+    check_t = _path(t, dt_max)[0][1:]
+    check_m = margin if len(check_t) == len(t) else ds.positions(check_t, cross)[4]
     for a, b in zones:          # inside a change point's zone it is not used (_bridged)
         check_m = np.where((check_t > a) & (check_t < b), np.inf, check_m)
     if not np.all(check_m > _SINGULAR):
