@@ -501,8 +501,7 @@ def _omega_zeta(s, ds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     an array of roots matching the last axis of ``ds``)."""
     wn = np.abs(s)
     rel = (s.conjugate() * ds).real / wn ** 2
-    zeta = -ds.real / wn + s.real * rel / wn
-    return rel, zeta
+    return rel, -ds.real / wn + s.real * rel / wn
 
 
 def _inverse_iteration(M, D, Ks, G, s: complex, steps: int = 3) -> np.ndarray:

@@ -377,8 +377,7 @@ def _solve(circuit, motion, amp, Omega, tol, harmonics, method,
             U[i, :v.size] = sw.velocity(name)[at:at + v.size] * (v / amp)
         return F, U
 
-    notes = _not_met(N, error, table_error, tol)
-    return N, Vs, Qs, Ks, error, notes, responses
+    return N, Vs, Qs, Ks, error, _not_met(N, error, table_error, tol), responses
 
 
 def _harmonics_round(circuit, motion, Omega, kmax, tol, harmonics, method, done_anyway):

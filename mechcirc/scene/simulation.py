@@ -778,8 +778,7 @@ def _finish(ctx, main, other, counts, notes, warn, out=None, other_extrema=None,
     crank, order, sub = tab or _crank_order(scene, model, theta_s, ripple, ts)
     if order is not None:                       # None: ``main`` is in that order already
         ts, ys = np.take(ts, order), np.take(ys, order, axis=0)
-    if out is None:
-        out = _outputs(model, kern, theta_s, ripple, ts, ys)
+    out = _outputs(model, kern, theta_s, ripple, ts, ys) if out is None else out
     extrema = _extrema(out)
     if check is None:
         check = extrema if sub is None else _extrema(out, sub)
@@ -933,8 +932,7 @@ def _deviation_rhs(model, kern, theta_s, ripple):
     a = model.arrays
     omega = model.omega
     args = model.kernel_args(theta_s, 1e300, ripple=ripple)
-    naux = model.naux()
-    aux = np.empty(naux)
+    aux = np.empty(model.naux())
     work = np.zeros((9, max(a["FI"].shape[0], a["PRIG"].shape[0])))
     rhs = kern.rhs
     lines = [(i, float(a["FF"][r, 0]), float(a["FF"][r, 1]))
@@ -955,7 +953,7 @@ def _deviation_rhs(model, kern, theta_s, ripple):
         yr, ydr = rigid(t)
         dy = np.empty(2 * n)
         rhs(t, e + yr, *args, dy, aux, work)
-        bad[0] = max(bad[0], aux[naux - 1])
+        bad[0] = max(bad[0], aux[-1])
         return dy - ydr
 
     return f, rigid, lines, bad
@@ -1019,7 +1017,6 @@ def _point_accelerations(model, theta_s, ripple, ts, ys, values, positions=None)
         return {}
     kern = kernels_for("rk4")[0]
     a = model.arrays
-    n = model.n_free
     th, w, dw = crank_angle(model.omega, theta_s, ripple, ts)
     coord: dict = {}
     for i in {i for _, _, i in model.point_fn.values()}:     # (q, q̇) of each part, contiguous
@@ -1029,7 +1026,7 @@ def _point_accelerations(model, theta_s, ripple, ts, ys, values, positions=None)
             coord[0] = (q0[:, 0].copy(), q0[:, 1] * w)
         else:
             coord[i] = (np.ascontiguousarray(ys[:, i - 1]),
-                        np.ascontiguousarray(ys[:, n + i - 1]))
+                        np.ascontiguousarray(ys[:, model.n_free + i - 1]))
     out = {}
     for p, (fx, fy, i) in model.point_fn.items():
         q, qd = coord[i]

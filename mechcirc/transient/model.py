@@ -154,9 +154,7 @@ def state_space(circuit: Circuit, *, linearise: bool = False) -> StateSpace:
     n1, n0, ns = B1.shape[1], Bd.shape[1], Bs.shape[1]
     Y = np.hstack([B1, Bd])
     Ky, Fyu, Fyx, S_y, S_u, S_x = _condense(Kq, Fu, Fx, Y, Bs, (T, nodes))
-    My = Y.T @ Mq @ Y
-    Dy = Y.T @ Dq @ Y
-    A, Bv, M11_inv = _dynamics(My, Dy, Ky, Fyu, Fyx, n1, n0, vel)
+    A, Bv, M11_inv = _dynamics(Y.T @ Mq @ Y, Y.T @ Dq @ Y, Ky, Fyu, Fyx, n1, n0, vel)
     N = A.shape[0]
     Cx, Dx, Cv, Dv = _outputs(T, B1, Bd, Bs, (S_y, S_u, S_x), p, A, Bv, vel)
     # Q from the residual r = M a + D v + K x = Gᵀ μ + g Q (consistent, exact).
@@ -221,8 +219,7 @@ def _node_matrices(work: Circuit, clear: list):
     G = np.zeros((len(system.levers), n))
     if system.levers:
         G[:, :nn] = system.dense("lever")[nn:, :nn]
-    index = {nd: i for i, nd in enumerate(nodes)}
-    return nodes, index, M, D, K, G
+    return nodes, {nd: i for i, nd in enumerate(nodes)}, M, D, K, G
 
 
 def incidence(index: dict, n1: str, n2: str, n: int) -> np.ndarray:

@@ -241,8 +241,7 @@ def _dropped(Cx, T, cim, late, qmax) -> float:
     Σ max|Cx T_col| · max_k |q_col| (``qmax``: each mode's largest |q|)."""
     if not late.any():
         return 0.0
-    cols = cim[late]
-    return float((np.abs(Cx @ T[:, cols]).max(axis=0) * qmax[late]).sum())
+    return float((np.abs(Cx @ T[:, cim[late]]).max(axis=0) * qmax[late]).sum())
 
 
 #: Bytes of modal signals per block of the fused node-output modal path: a

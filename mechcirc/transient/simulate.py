@@ -412,8 +412,7 @@ def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol, rate=None):
 
     def run(tol, atol, hm, locate=True, out=None):
         out = np.empty((t.size, N)) if out is None else out
-        z = z0.astype(float).copy()
-        steps = kern.dopri_run(z, 0.0, h, t.size, *mats, u, tol, atol, hm,
+        steps = kern.dopri_run(z0.astype(float), 0.0, h, t.size, *mats, u, tol, atol, hm,
                                kern._A, kern._B4, kern._C, kern._D, dense, out,
                                *kern.scratch(N, mats[-1].shape[0]),
                                1e-6 * hm if locate else math.inf)
@@ -442,8 +441,7 @@ def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol, rate=None):
     href = (hmax if dense else min(hmax, h)) / REF_H
     Z = run(rtol / REF_TOL, atol / REF_TOL, href)
     X = Z @ ss.Cx.T
-    dX = np.subtract(Z1, Z, out=Z1) @ ss.Cx.T
-    err = _peak(dX)
+    err = _peak(np.subtract(Z1, Z, out=Z1) @ ss.Cx.T)
     backend = "numba" if kern.HAVE_NUMBA else "Python"
     method = (f"Dormand-Prince 5(4) ({backend}), clearances in the RHS: rtol "
               f"{rtol / REF_TOL:g} and steps ≤ {href:.3g} s; error estimate = the "
@@ -488,10 +486,7 @@ def _absolute_tolerance(run: Callable, z0: np.ndarray, rtol: float, hmax: float)
 
 def _clearance_setup(ss: StateSpace, circuit):
     """(kernel matrices, largest |eigenvalue| with every contact closed) for :func:`_nonlinear`."""
-    kern = kernels()
-
     clear = backlash_elements(circuit)
-    N = ss.size
     # each clearance's relative displacement and velocity from z and u (a row each)
     G = _incidences({n: i for i, n in enumerate(ss.nodes)}, [e for e, _ in clear],
                     len(ss.nodes)).T
@@ -500,10 +495,10 @@ def _clearance_setup(ss: StateSpace, circuit):
     extra = ss.extra
     if extra is None:
         raise ValueError("the model was built without its clearance elements' force map")
-    mats = kern.kernel_args(ss.A, ss.B, cx, dx, cv, dv, extra, prm)
+    mats = kernels().kernel_args(ss.A, ss.B, cx, dx, cv, dv, extra, prm)
     # A with every contact closed: A + Σ_e extra_e ⊗ (c_e cx_e + d_e cv_e).
     closed = ss.A + extra @ (prm[:, :1] * cx + prm[:, 1:2] * cv)
-    w_max = float(np.abs(np.linalg.eigvals(closed)).max()) if N else 0.0
+    w_max = float(np.abs(np.linalg.eigvals(closed)).max()) if ss.size else 0.0
     return mats, w_max
 
 
@@ -628,10 +623,8 @@ def _incidences(index: dict, els, n: int) -> np.ndarray:
 
 
 def _law_forces(spring, comp, e, w):
-    kern = kernels()
-
-    c, d, b = _law_params(spring, comp)
     total = np.empty(e.size)
     part = np.empty(e.size)
-    kern.law_many(np.ascontiguousarray(e), np.ascontiguousarray(w), c, d, b, total, part)
+    kernels().law_many(np.ascontiguousarray(e), np.ascontiguousarray(w),
+                       *_law_params(spring, comp), total, part)
     return total, part
