@@ -22,7 +22,7 @@ It checks that both agree (K, roots) and prints the per-design times and their
 ratio (goal ≤ 2×).  The compiled kernel is loaded before timing.  It prints; it
 asserts nothing.  Run from the repository root::
 
-    python benchmarks/bench_batch.py [--big] [--repeats N] [--no-numba] [--nodal]
+    python benchmarks/bench_batch.py [--big] [--repeats N] [--no-numba] [--nodal | --damped]
 
 ``--nodal``: instead, a bridge network (not series–parallel: the nodal path)
 over a grid of three parameters, D = 100 and 1,000 designs, 200 ω, K with its
@@ -36,6 +36,11 @@ over a grid of two parameters: ``Designs.resonances`` (stacked eigenproblems,
 every root polished on its design's K by the stacked nodal solve) against
 ``find_resonances`` one design at a time (timed on 100 designs of the grid),
 same run, per design, with the largest difference of ω between the two.
+
+``--damped``: instead, ``netlists/heald_damped.mcir`` (series–parallel, damped,
+a massless direction with the drive released) over a grid of eta1 and eta3,
+D = 100 and 1,000: its resonances stacked against ``find_resonances`` one
+design at a time, as for the bridge.
 
 ``--no-numba`` hides numba (``sys.modules["numba"] = None`` before mechcirc is
 imported), as in an install without it: the batch then runs in numpy.
@@ -185,12 +190,8 @@ def nodal(repeats):
     nodal_resonances(repeats)
 
 
-def nodal_resonances(repeats, alone=100):
+def nodal_resonances(repeats):
     """Resonances of the bridge's designs: stacked against one by one (see --nodal)."""
-    import warnings
-
-    from mechcirc.resonances import find_resonances
-
     undamped = BRIDGE.replace("damper d1 c 0 {c}\n", "")
     # a mass across the bridge: a mass matrix that is not diagonal, every root polished
     across = undamped.replace("mass  m2 c 0 0.8", "mass  m2 c 0 0.8\nmass  m3 b c 0.3")
@@ -198,30 +199,49 @@ def nodal_resonances(repeats, alone=100):
         for D in (100, 1_000):
             n = round(D ** 0.5)
             g = np.meshgrid(np.geomspace(1e3, 1e6, n), np.linspace(0.5, 3, D // n))
-            params = dict(zip(("k5", "m1"), (x.ravel() for x in g)))
-            ds = designs(text, params)
-            part = np.linspace(0, ds.size - 1, min(alone, ds.size)).astype(int)
+            resonances_against_one_by_one(label, text, dict(zip(("k5", "m1"), (
+                x.ravel() for x in g))), repeats)
 
-            def one_by_one(ds=ds, part=part):
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")
-                    return [find_resonances(ds.design(d)) for d in part]
 
-            times: list = [[], []]
-            for _ in range(repeats):             # alternated
-                t_b, res = cpu(lambda p=params, t=text: designs(t, p).resonances(), 1)
-                t_1, ref = cpu(one_by_one, 1)
-                times[0].append(t_b / ds.size)
-                times[1].append(t_1 / part.size)
-            t_b, t_1 = (float(np.median(t)) for t in times)
-            dw = max((abs(a.omega - b.omega) / b.omega for d, r in zip(part, ref)
-                      for a, b in zip(res.list(d), r)), default=0.0)
-            same = all([a.kind for a in res.list(d)] == [b.kind for b in r]
-                       for d, r in zip(part, ref))
-            print(f"resonances, {label:>8}, D = {ds.size:>5,}: stacked {1e3 * t_b:6.3f} "
-                  f"ms/design, one by one {1e3 * t_1:6.3f} ms/design ({part.size} designs), "
-                  f"ratio {t_1 / t_b:5.1f}x; stacked {ds.size - res.single.size}/{ds.size}; "
-                  f"kinds {'equal' if same else 'DIFFER'}, ω differs by {dw:.1e} (relative)")
+def damped_heald(repeats):
+    """``netlists/heald_damped.mcir`` over eta1 × eta3: stacked against one by one (--damped)."""
+    text = (Path(__file__).parents[1] / "netlists" / "heald_damped.mcir").read_text()
+    for D in (100, 1_000):
+        n = round(D ** 0.5)
+        g = np.meshgrid(np.linspace(0.6, 1.0, n), np.linspace(0.7, 1.1, D // n))
+        resonances_against_one_by_one("heald", text, dict(zip(("eta1", "eta3"), (
+            x.ravel() for x in g))), repeats)
+
+
+def resonances_against_one_by_one(label, text, params, repeats, alone=100):
+    """``Designs.resonances`` against ``find_resonances`` on ``alone`` of the designs,
+    alternated, per design, with the largest difference of ω between the two."""
+    import warnings
+
+    from mechcirc.resonances import find_resonances
+
+    ds = designs(text, params)
+    part = np.linspace(0, ds.size - 1, min(alone, ds.size)).astype(int)
+
+    def one_by_one():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return [find_resonances(ds.design(d)) for d in part]
+
+    times: list = [[], []]
+    for _ in range(repeats):             # alternated
+        t_b, res = cpu(lambda: designs(text, params).resonances(), 1)
+        t_1, ref = cpu(one_by_one, 1)
+        times[0].append(t_b / ds.size)
+        times[1].append(t_1 / part.size)
+    t_b, t_1 = (float(np.median(t)) for t in times)
+    dw = max((abs(a.omega - b.omega) / b.omega for d, r in zip(part, ref)
+              for a, b in zip(res.list(d), r)), default=0.0)
+    same = all([a.kind for a in res.list(d)] == [b.kind for b in r] for d, r in zip(part, ref))
+    print(f"resonances, {label:>8}, D = {ds.size:>5,}: stacked {1e3 * t_b:6.3f} "
+          f"ms/design, one by one {1e3 * t_1:6.3f} ms/design ({part.size} designs), "
+          f"ratio {t_1 / t_b:5.1f}x; stacked {ds.size - res.single.size}/{ds.size}; "
+          f"kinds {'equal' if same else 'DIFFER'}, ω differs by {dw:.1e} (relative)")
 
 
 def main():
@@ -230,6 +250,8 @@ def main():
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--nodal", action="store_true",
                     help="a bridge network on the nodal path: stacked against one by one")
+    ap.add_argument("--damped", action="store_true",
+                    help="heald_damped.mcir's resonances: stacked against one by one")
     ap.add_argument("--no-numba", action="store_true",
                     help="hide numba (read before import, see the docstring)")
     args = ap.parse_args()
@@ -244,8 +266,8 @@ def main():
     print(f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
           f"numpy {np.__version__}, scipy {scipy.__version__}, {compiled}; "
           f"load {os.getloadavg()[0]:.2f}")
-    if args.nodal:
-        nodal(args.repeats)
+    if args.nodal or args.damped:
+        (nodal if args.nodal else damped_heald)(args.repeats)
         print(f"load after: {os.getloadavg()[0]:.2f}")
         return
     rng = np.random.default_rng(21)

@@ -20,7 +20,8 @@ the result, :class:`Designs`, evaluates
 
 A design the batch cannot take (a value that is not a positive finite
 number, a topology that changes with the values, a nodal point that needs more
-than the float64 refinement, a mass matrix too close to singular for the resonances) is
+than the float64 refinement, an undamped mass matrix too close to singular for the
+resonances) is
 evaluated by the single-design path (:meth:`Designs.design` gives its
 :class:`~mechcirc.circuit.Circuit`); the results say which and how many.
 :func:`from_circuits` makes the designs of circuits built in code (a scene
@@ -377,8 +378,9 @@ class Designs(Memos):
         series–parallel: the same stacked eigenproblems, every root polished as
         :func:`~mechcirc.resonances.find_resonances` polishes it, the complex
         secant on the design's own K(s) from the stacked nodal solve
-        (:func:`_nodal_roots`).  The others (a mass matrix
-        too close to singular, levers whose ratio varies, a mode in both the
+        (:func:`_nodal_roots`).  The others (an undamped mass matrix too close to
+        singular, or a damped one that is singular beyond the reversed problem's
+        reach, levers whose ratio varies, a mode in both the
         held and released problems) go through
         :func:`mechcirc.resonances.find_resonances` one by one (``single``).
         """

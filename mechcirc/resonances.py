@@ -956,7 +956,7 @@ def batched_roots(ds, omega_max: float | None = None):
     anti-resonances), and each root polished by a secant on its design's own
     K(ω) (:func:`_secant_designs`).
 
-    Damped designs (a regular mass matrix): :func:`_stacked_damped`.
+    Damped designs: :func:`_stacked_damped` (massless directions: :func:`_shifted_roots`).
 
     Returns ``(designs, pole, s, error)`` for the designs it solves
     (series–parallel, a mass matrix it can reduce, the template's lever ratios,
@@ -1162,19 +1162,21 @@ def _stacked_modes(M: np.ndarray, K: np.ndarray, n0: int, omega_max):
 def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
     """Damped roots s of stacks of projected problems (s² M + s D + K) v = 0, polished.
 
-    :func:`_modes`'s scaling, filters and estimates on stacks, for mass
-    matrices that are safely definite (the criterion of :func:`_undamped_stack`;
-    others are not ``ok``): the companion matrix [[0, I], [−M⁻¹K, −M⁻¹D]] of
-    every design, one stacked ``eigvals`` call (where :func:`_damped` runs QZ on
+    :func:`_modes`'s scaling, filters and estimates on stacks: the companion
+    matrix [[0, I], [−M⁻¹K, −M⁻¹D]] of every design whose mass matrix is safely
+    definite (the criterion of :func:`_undamped_stack`), of the reversed problem
+    at a shift for the others (:func:`_shifted_roots`; designs it cannot take are
+    not ``ok``), one stacked ``eigvals`` call (where :func:`_damped` runs QZ on
     the pencil), and each root polished by Newton's method on det P(s),
     s ← s − 1/tr(P(s)⁻¹ P'(s)), P(s) = s²M + sD + K, batched.  The error: the
     last Newton step, at least :func:`_modes`'s estimates (eps·1e2·
-    |s|max/|s|, nearly coalescing roots): P(s) is formed in float64, so Newton
+    |s|max/|s|, nearly coalescing roots) and 4·eps·κ (:func:`_condition`):
+    P(s) is formed in float64, so Newton
     cannot make a root more accurate than that (find_resonances polishes on K
     in double-double and reports less).  Returns ``(s, error, ok)``, NaN where
     no root (s with Im s ≥ 0, |s| > 0).
     """
-    n, k = M.shape[0], M.shape[1]
+    k = M.shape[1]
     scale_m, w_ref, Ms, Ks, ok = _scaled_stack(M, K)
     with np.errstate(all="ignore"):
         Ds = Dm / (scale_m * w_ref)[:, None, None]
@@ -1182,35 +1184,73 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
     eye = np.eye(k)
     Ms, Ds = np.where(ok[:, None, None], Ms, eye), np.where(ok[:, None, None], Ds, 0.0)
     Ks = np.where(ok[:, None, None], Ks, eye)
-    # M⁻¹ = L⁻ᵀ L⁻¹ by Cholesky; ok loses the designs whose M is not safely definite.
-    Ms, Linv = _stacked_cholesky_inverse(Ms, ok)
-    Minv = np.swapaxes(Linv, 1, 2) @ Linv
-    A = np.zeros((n, 2 * k, 2 * k))
-    A[:, :k, k:] = eye
-    A[:, k:, :k] = -(Minv @ Ks)
-    A[:, k:, k:] = -(Minv @ Ds)
-    sig = np.linalg.eigvals(A)                           # s / w_ref
+    # M⁻¹ = L⁻ᵀ L⁻¹ by Cholesky where M is safely definite (``definite``).
+    definite = ok.copy()
+    _, Linv = _stacked_cholesky_inverse(Ms, definite)
+    sig = np.linalg.eigvals(_companion(Linv, Ds, Ks))   # s / w_ref
+    finite = np.ones(sig.shape, dtype=bool)
+    shifted = np.flatnonzero(ok & ~definite)
+    if shifted.size:
+        sig[shifted], finite[shifted], ok[shifted] = _shifted_roots(
+            Ms[shifted], Ds[shifted], Ks[shifted])
     mag = np.abs(sig)
-    live = (mag > 1e-6) & (sig.imag >= -1e-12 * mag) & ok[:, None]
+    live = (mag > 1e-6) & (sig.imag >= -1e-12 * mag) & finite & ok[:, None]
     # Coalescing roots (ζ → 1): _modes's estimate from the gaps.
     with np.errstate(all="ignore"):
         gap = np.abs(sig[:, :, None] - sig[:, None, :])
         gap[:, np.arange(2 * k), np.arange(2 * k)] = np.inf
         near = np.minimum(np.sqrt(_EPS), _EPS / (gap.min(axis=2) / mag))
-    sig, step = _newton_det(np.where(live, sig, 1.0 + 0j), live, Ms, Ds, Ks)
+    sig, step, kappa = _newton_det(np.where(live, sig, 1.0 + 0j), live, Ms, Ds, Ks)
     mag = np.abs(sig)
     with np.errstate(all="ignore"):
         # Newton on det P in float64 cannot beat the rounding of P(s) itself, about
         # the eigen-solver's own estimate (_modes's eps·1e2·|s|max/|s|):
-        # measured 1.5e-13 on a slow overdamped root (tests/test_batch.py).
+        # measured 1.5e-13 on a slow overdamped root (tests/test_batch.py), or
+        # 4·eps times the root's condition number where that is larger (a massless
+        # direction's root: 6e-14 measured, 2.2e-14 by the first estimate).
         top = np.where(live, mag, 0.0).max(axis=1, initial=1.0)[:, None]
         err = np.maximum(np.maximum(step / mag, 1e2 * _EPS * top / mag), 10 * near)
+        err[live] = np.maximum(err[live], 4 * _EPS * kappa)
     s, err = np.where(live, sig * w_ref[:, None], np.nan), np.where(live, err, np.nan)
     s = np.where(np.abs(s.imag) <= err * np.abs(s), s.real + 0j, s)
     if omega_max is not None:
         beyond = ~(np.abs(s) <= omega_max)
         s[beyond] = err[beyond] = np.nan
     return s, err, ok
+
+
+def _companion(Linv: np.ndarray, Ds: np.ndarray, Ks: np.ndarray) -> np.ndarray:
+    """The companion matrices [[0, I], [−M⁻¹K, −M⁻¹D]] of a stack, M⁻¹ = L⁻ᵀ L⁻¹."""
+    k = Ks.shape[1]
+    Minv = np.swapaxes(Linv, 1, 2) @ Linv
+    A = np.zeros((Ks.shape[0], 2 * k, 2 * k))
+    A[:, :k, k:] = np.eye(k)
+    A[:, k:, :k] = -(Minv @ Ks)
+    A[:, k:, k:] = -(Minv @ Ds)
+    return A
+
+
+def _shifted_roots(Ms: np.ndarray, Ds: np.ndarray, Ks: np.ndarray) -> tuple:
+    """Roots s of (s² M + s D + K) v = 0 for a stack whose mass matrices are singular
+    (massless directions; the single path runs QZ, :func:`_damped`), by the reversed
+    problem at the shift σ = 1 (scaled units): s = σ + 1/μ with
+    μ² P(σ) + μ (2σM + D) + M = 0, P(σ) = σ²M + σD + K.  A passive network has no
+    root with Re s > 0, so P(σ) is definite and the companion of the μ problem is
+    formed as for a regular M.  μ ≈ 0 is an infinite root (a massless direction).
+
+    Returns ``(s, finite, ok)``: ``ok`` false for a design whose P(σ) is not safely
+    definite or with a μ neither clearly zero (|μ| ≤ 1e-10 of the largest) nor clearly
+    finite (≥ 1e-6 of it: |s| up to about 1e6 w_ref); the single path takes those.
+    """
+    P, Dp = Ms + Ds + Ks, 2 * Ms + Ds
+    ok = np.ones(Ms.shape[0], dtype=bool)
+    _, Linv = _stacked_cholesky_inverse(P, ok)
+    mu = np.linalg.eigvals(_companion(Linv, Dp, Ms))
+    size = np.abs(mu) / np.abs(mu).max(axis=1, initial=0.0)[:, None]
+    finite = size >= 1e-6
+    ok &= ~((size > 1e-10) & ~finite).any(axis=1)
+    with np.errstate(all="ignore"):
+        return np.where(finite, 1.0 + 1.0 / mu, 1e300), finite, ok
 
 
 def _stacked_cholesky_inverse(Ms: np.ndarray, ok: np.ndarray) -> tuple:
@@ -1236,22 +1276,53 @@ def _stacked_cholesky_inverse(Ms: np.ndarray, ok: np.ndarray) -> tuple:
 
 def _newton_det(sig, live, Ms, Ds, Ks, steps: int = 3) -> tuple:
     """Newton on det P(s), s ← s − 1/tr(P(s)⁻¹ P'(s)), for the ``live`` roots ``sig`` of
-    each design; returns the roots and the size of the last step."""
-    step = np.zeros(sig.shape)
+    each design; returns the roots, the size of the last step and their condition
+    numbers (:func:`_condition`, flat over the live roots)."""
+    d, r = np.nonzero(live)
+    x, step = sig[d, r], np.zeros(d.size)
+    M, D, K = Ms[d], Ds[d], Ks[d]
+    k = M.shape[1]
+    # One right-hand side more: P(s)⁻¹ b, an inverse-iteration step towards P's null
+    # vector at the last iterate (a step from the root: its vector to that order).
+    b = np.broadcast_to((1.0 + np.arange(k) / k)[:, None], (d.size, k, 1))
     for _ in range(steps):
-        P = sig[..., None, None] ** 2 * Ms[:, None] + sig[..., None, None] * Ds[:, None] + \
-            Ks[:, None]
-        dP = 2 * sig[..., None, None] * Ms[:, None] + Ds[:, None]
+        z = x[:, None, None]
+        P, rhs = z ** 2 * M + z * D + K, np.concatenate([2 * z * M + D, b], axis=2)
         with np.errstate(all="ignore"):
             try:
-                t = np.trace(np.linalg.solve(P, dP), axis1=-2, axis2=-1)
-            except np.linalg.LinAlgError:                 # exactly on a root
-                break
-            delta = 1.0 / t
-        good = np.isfinite(delta) & live
-        sig = np.where(good, sig - delta, sig)
+                sol = np.linalg.solve(P, rhs)
+            except np.linalg.LinAlgError:
+                # A zero pivot: that s is a root to working precision (a chain's
+                # last pivot can cancel exactly); the others go on.
+                exact = np.linalg.det(P) == 0
+                sol = np.linalg.solve(np.where(exact[:, None, None], np.eye(k), P), rhs)
+                sol[exact] = np.nan
+            delta = 1.0 / np.trace(sol[..., :k], axis1=-2, axis2=-1)
+        null = sol[..., k]
+        good = np.isfinite(delta)
+        x = np.where(good, x - delta, x)
         step = np.where(good, np.abs(delta), 0.0)
-    return sig, step
+    out, size = sig.copy(), np.zeros(sig.shape)
+    out[d, r], size[d, r] = x, step
+    return out, size, _condition(x, null, M, D, K)
+
+
+def _condition(s, x, M, D, K) -> np.ndarray:
+    """The normwise relative condition number of roots s of P(s) = s²M + sD + K
+    (Tisseur, 2000): κ = (|s|²‖M‖ + |s|‖D‖ + ‖K‖)‖x‖² / (|s| |xᵀ P'(s) x|), x the null
+    vector of P(s) (M, D and K are symmetric, so the left one is x̄; rows not finite:
+    from the singular value decomposition), Frobenius norms (≥ the 2-norms)."""
+    z = s[:, None, None]
+    exact = np.flatnonzero(~np.isfinite(x).all(axis=1))
+    if exact.size:                                  # P(s) exactly singular: its SVD's
+        P = z[exact] ** 2 * M[exact] + z[exact] * D[exact] + K[exact]
+        x[exact] = np.linalg.svd(P)[2][:, -1, :].conj()
+    with np.errstate(all="ignore"):
+        dP = np.einsum("ri,rij,rj->r", x, 2 * z * M + D, x)
+        norm = [np.sqrt(np.sum(np.abs(X) ** 2, axis=(1, 2))) for X in (M, D, K)]
+        mag = np.abs(s)
+        return (mag ** 2 * norm[0] + mag * norm[1] + norm[2]) * np.sum(np.abs(x) ** 2, axis=1) \
+            / (mag * np.abs(dP))
 
 
 def _lower_inverse(L: np.ndarray) -> np.ndarray:

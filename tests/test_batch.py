@@ -307,6 +307,81 @@ def test_batched_damped_resonances_against_mpmath():
             assert r.omega_d == pytest.approx(float(abs(mpmath.im(s))), rel=1e-12, abs=1e-12)
 
 
+def test_batched_damped_resonances_with_a_massless_node_against_mpmath():
+    # drive at a; m1 a–0, k a–b, c b–0, k2 b–d, m2 d–0: node b has no mass, so both
+    # mass matrices are singular (the reversed problem at a shift, _shifted_roots).
+    # Held (a fixed): H(s) = c m2 s³ + (k + k2) m2 s² + c k2 s + k k2.  Released:
+    # (m1 s² + k) H(s) − k² (m2 s² + k2) = s·(quartic), a rigid root s = 0 (not reported).
+    text = ".param m1=1 m2=0.5 k=1e4 k2=3e4 c=30\ndrive V a 0 velocity=1\nmass ma a 0 m1\n" \
+           "spring ka a b k\ndamper cb b 0 c\nspring kb b d k2\nmass md d 0 m2\n"
+    rng = np.random.default_rng(5)
+    n = 12
+    params = {"m1": rng.uniform(0.2, 3, n), "m2": rng.uniform(0.2, 3, n),
+              "k": rng.uniform(1e3, 1e5, n), "k2": rng.uniform(1e3, 1e5, n),
+              "c": np.geomspace(1, 3000, n)}          # from ζ ≈ 0.001 to overdamped
+    res = designs(text, params).resonances()
+    assert res.single.size == 0 and not res.failed
+    mpmath.mp.dps = 40
+    worst = 0.0
+    for d in range(n):
+        m1, m2, k, k2, c = (mpmath.mpf(float(params[x][d])) for x in ("m1", "m2", "k", "k2", "c"))
+        H = [c * m2, (k + k2) * m2, c * k2, k * k2]
+        free = [m1 * H[0], m1 * H[1], m1 * H[2] + k * H[0], m1 * H[3] + k * H[1] - k * k * m2,
+                k * H[2]]
+        ref = [("resonance", s) for s in mpmath.polyroots(H, maxsteps=200, extraprec=200)
+               if mpmath.im(s) >= 0] + \
+            [("antiresonance", s) for s in mpmath.polyroots(free, maxsteps=200, extraprec=200)
+             if mpmath.im(s) >= 0]
+        ref.sort(key=lambda t: (float(abs(t[1])), t[0]))
+        got = res.list(d)
+        assert [r.kind for r in got] == [kd for kd, _ in ref] == \
+            [r.kind for r in find_resonances(one(text, params, d))]
+        for r, (_, s) in zip(got, ref):
+            wn = float(abs(s))
+            rel = abs(r.omega - wn) / wn
+            worst = max(worst, rel)
+            assert r.error >= rel                            # the estimate covers it
+            assert r.zeta == pytest.approx(float(-mpmath.re(s) / abs(s)), rel=1e-12, abs=1e-15)
+            assert r.omega_d == pytest.approx(float(abs(mpmath.im(s))), rel=1e-12, abs=1e-12)
+    # Measured 4.6e-11 (an overdamped root at 0.26 rad/s beside one at 1.5e5 rad/s,
+    # its estimate 1.3e-8); the complex roots within 2e-15.
+    assert worst <= 1e-10
+
+
+def test_batched_resonances_of_the_damped_heald_drive_agree_with_the_single_path():
+    # heald_damped.mcir has one massless direction with the drive released: batched
+    # since _shifted_roots (before, every design went through find_resonances).  The
+    # single path polishes on K in double-double (1e-16 against mpmath); the
+    # batched roots differ from it by at most 1.5e-13, each within its estimate.
+    text = (Path(__file__).parents[1] / "netlists" / "heald_damped.mcir").read_text()
+    ds = designs(text, {"eta1": np.linspace(0.6, 1.0, 6), "eta3": np.linspace(1.1, 0.7, 6)})
+    res = ds.resonances()
+    assert res.single.size == 0 and not res.failed
+    for d in range(6):
+        single = find_resonances(ds.design(d))
+        got = res.list(d)
+        assert [r.kind for r in got] == [r.kind for r in single] and len(got) == 6
+        for r, ref in zip(got, single):
+            assert abs(r.omega - ref.omega) <= (r.error + ref.error) * ref.omega
+            assert abs(r.zeta - ref.zeta) <= 1e-12
+
+
+def test_newton_polish_goes_on_beside_a_root_that_makes_its_matrix_exactly_singular():
+    # P(s) = s² I + diag(4, 9): at s = 2j P has an exact zero pivot, which makes
+    # numpy's stacked solve refuse the whole stack; the other design's root must
+    # still be polished (3.1j → 3j), the exact one left where it is.
+    from mechcirc.resonances import _newton_det
+
+    Ms, Ds, Ks = np.stack([np.eye(2)] * 2), np.zeros((2, 2, 2)), np.stack([np.diag([4.0, 9.0])] * 2)
+    s, step, kappa = _newton_det(np.array([[2j], [3.1j]]), np.ones((2, 1), bool), Ms, Ds, Ks)
+    assert s[0, 0] == 2j and step[0, 0] == 0
+    assert abs(s[1, 0] - 3j) < 1e-6 and step[1, 0] > 0
+    # κ of a simple root of diagonal P: (|s|² + k)/(2|s|²) = 1 at s = 2j (Frobenius
+    # norms: (4√2 + √97)/8 = 1.94); the second at 3j: (9√2 + √97)/18 = 1.254.
+    assert kappa == pytest.approx([(4 * 2 ** 0.5 + 97 ** 0.5) / 8,
+                                   (9 * 2 ** 0.5 + 97 ** 0.5) / 18], rel=1e-6)
+
+
 def test_batched_roots_of_equal_omega_are_sorted_as_find_resonances_sorts():
     # The network above with c²(1/m2 − 1/m1) = k: the released cubic factors as
     # (s + c/m1)(s² + (k/c) s + k/m2), so a released pair has |s|² = k/m2, the held
