@@ -484,7 +484,11 @@ def _modes(M, D, Ks, G, damped: bool, omega_max=None, vectors: bool = False):
         if not all(np.isfinite(X).all() for X in scaled):
             raise SolverError("resonances: the damping, mass and stiffness scales are too far "
                               "apart for float64", status="range")
+        scaled, static = _condensed(*scaled)
         s, err, U = _damped_roots(scaled, w_ref, vectors)
+        if static is not None and vectors:
+            R, N, X = static
+            U = R @ U + N @ (-X @ U)        # the condensed directions follow statically
         must = np.ones(s.size)
     roots = np.column_stack([s, err, must]) if s.size else np.zeros((0, 3), dtype=complex)
     # Z is the identity without constraints: no product (and no fresh n × n array).
@@ -511,6 +515,27 @@ def _undamped_roots(M, K, w_ref: float, vectors: bool):
     # amplified by the condition of the condensed block): not a bound
     # then, and these roots are always polished on K (column 2).
     return s, err, np.full(s.size, 0.0 if direct else 1.0), U
+
+
+def _condensed(M: np.ndarray, D: np.ndarray, K: np.ndarray) -> tuple:
+    """The directions with neither mass nor damping (null(M) ∩ null(D), both positive
+    semi-definite) condensed out statically: K_c = K_rr − K_nrᵀ K_nn⁻¹ K_nr.
+
+    There P(s) = K: no root.  Left in the pencil they are infinite roots in
+    Jordan blocks, which QZ splits by about √eps into spurious finite ones (a
+    resonance at 1.8e10 rad/s with ζ = 4e-6 on a five-node chain,
+    ``tests/test_resonances.py``).  Returns ``((M, D, K) reduced, (R, N, X))``,
+    the kept and condensed bases and x_N = −X x_R, or the matrices and None when
+    there is nothing to condense.
+    """
+    mu, V = np.linalg.eigh(M + D)
+    null = mu <= 1e-13 * max(mu.max(initial=0.0), 1e-300)
+    if not null.any() or null.all():
+        return (M, D, K), None
+    R, N = V[:, ~null], V[:, null]
+    Knr = N.T @ K @ R
+    X = np.linalg.lstsq(N.T @ K @ N, Knr, rcond=_EPS)[0]
+    return (R.T @ M @ R, R.T @ D @ R, R.T @ K @ R - Knr.T @ X), (R, N, X)
 
 
 def _damped_roots(scaled: tuple[np.ndarray, np.ndarray, np.ndarray], w_ref: float,

@@ -402,3 +402,76 @@ def test_banded_and_dense_symmetric_eigenvalues_agree(case, monkeypatch):
     lam, ref = _symmetric_eigvals(A), np.linalg.eigvalsh(A)
     assert calls == [(2, 400)] if case == "chain" else len(calls) == 1
     assert np.max(np.abs(lam - ref)) <= 1e-14 * ref[-1]
+
+
+# A chain whose nodes n2…n5 have masses and dampers only between them (n2–n3, n4–n5)
+# and one damper from n3 to n4: moving n2…n5 together meets neither mass nor damping,
+# an infinite root in a Jordan block, which QZ split by about √eps into a spurious
+# resonance at 1.8e10 rad/s (ζ = 4e-6) and, through it, wrong estimates and lost roots.
+MASSLESS_UNDAMPED = """\
+drive V n1 0 velocity=1
+mass mg1 n1 0 2.35392
+spring sg1 n1 0 16793.15
+damper dg1 n1 0 0.1078105
+spring sl1 n1 n2 423.05
+mass ml2 n2 n3 0.220727
+damper dl2 n2 n3 35.3735
+spring sg3 n3 0 58299
+damper dl3 n3 n4 0.384112
+mass ml4 n4 n5 1.98569
+damper dl4 n4 n5 35.4521
+spring sg5 n5 0 144.8565
+"""
+
+
+def _chain_pencil_mp():
+    """M, D, K of MASSLESS_UNDAMPED (nodes n1…n5), stamped by hand in mpmath."""
+    M, D, K = (mpmath.zeros(5) for _ in range(3))
+    for line in MASSLESS_UNDAMPED.splitlines()[1:]:
+        kind, _, a, b, v = line.split()
+        X, i, v = {"mass": M, "damper": D, "spring": K}[kind], int(a[1]) - 1, mpmath.mpf(v)
+        X[i, i] += v
+        if b != "0":
+            j = int(b[1]) - 1
+            X[j, j] += v
+            X[i, j] -= v
+            X[j, i] -= v
+    return M, D, K
+
+
+def _det_roots_mp(M, D, K):
+    """The finite nonzero roots of det(s²M + sD + K): its coefficients from the
+    determinant at 2n + 1 points on a circle (a discrete Fourier transform)."""
+    d = 2 * M.rows
+    z = [100 * mpmath.expjpi(mpmath.mpf(2 * k) / (d + 1)) for k in range(d + 1)]
+    det = [mpmath.det(x ** 2 * M + x * D + K) for x in z]
+    c = [sum(det[k] * z[k] ** -j for k in range(d + 1)) / (d + 1) for j in range(d + 1)]
+    tiny = max(abs(x) for x in c) * mpmath.mpf(10) ** -40
+    while abs(c[-1]) < tiny:            # degree below 2n: M singular
+        c.pop()
+    while abs(c[0]) < tiny:             # rigid roots s = 0
+        c.pop(0)
+    return [s for s in mpmath.polyroots(c[::-1], maxsteps=400, extraprec=400)
+            if mpmath.im(s) >= -1e-40 * abs(s)]
+
+
+def test_damped_roots_with_a_direction_free_of_mass_and_damping_against_mpmath():
+    from mechcirc.modes import modes
+
+    with mpmath.workdps(60):
+        M, D, K = _chain_pencil_mp()
+        ref = sorted([("resonance", s) for s in _det_roots_mp(*(X[1:, 1:] for X in (M, D, K)))]
+                     + [("antiresonance", s) for s in _det_roots_mp(M, D, K)],
+                     key=lambda t: (float(abs(t[1])), t[0]))
+    circuit = mechcirc.parse(MASSLESS_UNDAMPED)
+    got = circuit.resonances()
+    assert [r.kind for r in got] == [k for k, _ in ref] and len(got) == 9
+    for r, (_, s) in zip(got, ref):
+        rel = abs(r.omega - float(abs(s))) / float(abs(s))
+        assert rel <= r.error and rel <= 1e-15           # measured ≤ 1.7e-16
+    # The one oscillatory mode's shape: a null vector of P(s) (residual 1.9e-16 measured).
+    Mf, Df, Kf = (np.array(X.tolist(), dtype=float) for X in (M, D, K))
+    (m,) = [m for m in modes(circuit) if m.shape]
+    x = np.array([m.shape[f"n{i}"] for i in range(1, 6)])
+    P = m.s ** 2 * Mf + m.s * Df + Kf
+    assert np.linalg.norm(P @ x) <= 1e-14 * np.linalg.norm(P) * np.linalg.norm(x)
