@@ -853,8 +853,8 @@ def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances,
     rest = np.setdiff1d(np.flatnonzero(~np.isin(np.arange(D), list(res.failed))), fast)
 
     def peaks(d, c):
-        # The design's resonances once (find_resonances, as peak would) for all three.
-        found = res.list(d) if res.omega_max is not None and res.omega_max >= hi else None
+        # The design's resonances once for all three (omega_max None: all of them).
+        found = res.list(d) if res.omega_max is None or res.omega_max >= hi else None
         return [peak(c, lo, hi, quantity=q, resonances=found) for q in ("K", "S", "Q0")]
 
     done, more = _alone(ds, rest, peaks)

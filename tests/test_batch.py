@@ -179,6 +179,26 @@ def test_damped_designs_take_the_single_path_and_are_counted():
         assert ex.K_max[d] == peak(c, 10, 1e3, quantity="K").value
 
 
+def test_extremes_of_damped_designs_reuse_resonances_computed_without_a_band(monkeypatch):
+    # resonances() without omega_max holds every root, so extremes() must not solve
+    # them again for each of the three peaks (it did: 48 against 9 ms a design).
+    import mechcirc.circuit
+
+    params = {"c": np.array([1.0, 10.0])}
+    ds = designs(DAMPED, params)
+    res = ds.resonances()
+    band = np.geomspace(10, 1e3, 50)
+    want = ds.extremes(band)
+    calls = []
+    solve = mechcirc.circuit.Circuit.resonances
+    monkeypatch.setattr(mechcirc.circuit.Circuit, "resonances",
+                        lambda *a, **k: calls.append(1) or solve(*a, **k))
+    got = ds.extremes(band, resonances=res)
+    assert calls == []
+    for name in ("K_max", "omega_at_K_max", "K_min", "Q0_max"):
+        np.testing.assert_array_equal(getattr(got, name), getattr(want, name))
+
+
 def test_invalid_designs_fail_with_the_parsers_message():
     text = ".param m=2\nmass m1 a 0 m\nspring k a 0 100\ndrive V a 0 velocity=1\n"
     ds = designs(text, {"m": [1.0, -1.0, 2.0]})
