@@ -40,7 +40,8 @@ same run, per design, with the largest difference of ω between the two.
 ``--damped``: instead, ``netlists/heald_damped.mcir`` (series–parallel, damped,
 a massless direction with the drive released) over a grid of eta1 and eta3,
 D = 100 and 1,000: its resonances stacked against ``find_resonances`` one
-design at a time, as for the bridge.
+design at a time, as for the bridge, and its extremes over 50 … 5,000 rad/s
+(resonances given) against ``mechcirc.peak`` design by design.
 
 ``--no-numba`` hides numba (``sys.modules["numba"] = None`` before mechcirc is
 imported), as in an install without it: the batch then runs in numpy.
@@ -209,8 +210,41 @@ def damped_heald(repeats):
     for D in (100, 1_000):
         n = round(D ** 0.5)
         g = np.meshgrid(np.linspace(0.6, 1.0, n), np.linspace(0.7, 1.1, D // n))
-        resonances_against_one_by_one("heald", text, dict(zip(("eta1", "eta3"), (
-            x.ravel() for x in g))), repeats)
+        params = dict(zip(("eta1", "eta3"), (x.ravel() for x in g)))
+        resonances_against_one_by_one("heald", text, params, repeats)
+        extremes_against_one_by_one(text, params, repeats)
+
+
+def extremes_against_one_by_one(text, params, repeats, band=(50.0, 5000.0), alone=100):
+    """``Designs.extremes`` (resonances given) against ``mechcirc.peak`` (K, S and Q0)
+    design by design on ``alone`` of them, alternated, per design, with the largest
+    difference of the extremes' values between the two."""
+    import warnings
+
+    from mechcirc import peak
+
+    ds = designs(text, params)
+    res = ds.resonances()
+    part = np.linspace(0, ds.size - 1, min(alone, ds.size)).astype(int)
+
+    def one_by_one():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return [[peak(ds.design(d), *band, quantity=q, resonances=res.list(d))
+                     for q in ("K", "S", "Q0")] for d in part]
+
+    times: list = [[], []]
+    for _ in range(repeats):             # alternated
+        t_b, ex = cpu(lambda: ds.extremes(band, resonances=res), 1)
+        t_1, ref = cpu(one_by_one, 1)
+        times[0].append(t_b / ds.size)
+        times[1].append(t_1 / part.size)
+    t_b, t_1 = (float(np.median(t)) for t in times)
+    dv = max(max(abs(ex.K_max[d] / k.value - 1), abs(ex.K_min[d] * s.value - 1),
+                 abs(ex.Q0_max[d] / q.value - 1)) for d, (k, s, q) in zip(part, ref))
+    print(f"extremes,   heald, D = {ds.size:>5,}: stacked {1e3 * t_b:6.3f} ms/design, one by "
+          f"one {1e3 * t_1:6.3f} ms/design ({part.size} designs), ratio {t_1 / t_b:5.1f}x; "
+          f"searched {ds.size - ex.single.size}/{ds.size}; values differ by {dv:.1e} (relative)")
 
 
 def resonances_against_one_by_one(label, text, params, repeats, alone=100):

@@ -815,6 +815,90 @@ class DesignExtremes:
 _EXTREMES = ("K_min", "omega_at_K_min", "K_max", "omega_at_K_max", "Q0_max", "omega_at_Q0_max")
 
 
+#: (3 − √5)/2: the golden section's step, the fraction of a bracket dropped each evaluation.
+_GOLDEN = (3 - math.sqrt(5)) / 2
+
+
+def _searched_extremes(ds: Designs, which: NDArray, lo: float, hi: float,
+                       res: DesignResonances) -> tuple[NDArray, dict]:
+    """The extremes of damped series–parallel designs ``which``, located as
+    :func:`mechcirc.peak` locates them (its 401-point grid, the band's ends, a
+    bracket around the grid's best point and one of four half-power bandwidths
+    around each damped root of the kind that makes the quantity peak) with every
+    design's brackets searched at once: a golden-section search to 1e-12 of ω on
+    the designs' own K (the plan at per-design points), where ``peak`` runs a
+    bounded Brent search per bracket (the same maximum to rounding; ω, on a
+    flat top, to about 1e-8).  Left out: all, if ``res`` does not reach the
+    band's top; designs with a lossless root in the band, or a K that is 0 or not
+    finite where searched (``peak`` calls those unbounded).  Returns
+    ``(designs solved, {extreme: values})``.
+    """
+    covered = res.omega_max is None or res.omega_max >= hi
+    p = ds.plan(which) if which.size and covered else None
+    if p is None:
+        return which[:0], {}
+    grid = np.geomspace(max(lo, hi * 1e-12), hi, 401) if lo > 0 else np.linspace(lo, hi, 401)
+    absK = np.abs(evaluate_designs(p, np.concatenate([grid, [lo, hi]]))[0])
+    ok = (np.isfinite(absK) & (absK > 0)).all(axis=1)
+    live = res.count[which, None] > np.arange(res.omega.shape[1])
+    with np.errstate(invalid="ignore"):
+        w, wd, zeta = res.omega[which], res.omega_d[which], res.zeta[which]
+        band = live & (w >= lo * (1 - 1e-12)) & (w <= hi * (1 + 1e-9))
+    found: dict = {}
+    for quantity, kind, sign in (("K", "antiresonance", 1), ("S", "resonance", -1)):
+        roots = band & (res.kind[which] == kind)
+        ok &= ~(roots & (zeta <= UNDAMPED_ZETA)).any(axis=1)
+        q = absK ** sign
+        i = np.argmax(q[:, :-2], axis=1)
+        centre = np.where(wd > 0, wd, w)
+        with np.errstate(invalid="ignore"):
+            half = np.maximum(zeta * w, 1e-9 * w)
+        a = np.maximum(np.column_stack([grid[np.maximum(i - 1, 0)], centre - 4 * half]), lo)
+        b = np.minimum(np.column_stack([grid[np.minimum(i + 1, grid.size - 1)],
+                                        centre + 4 * half]), hi)
+        use = np.column_stack([np.ones(which.size, bool), roots]) & (a < b)
+        x, v = _golden_max(lambda om, sign=sign: np.abs(evaluate_designs(p, om)[0]) ** sign,
+                           np.where(use, a, lo), np.where(use, b, hi))
+        ok &= (np.isfinite(v) | ~use).all(axis=1)
+        # peak's order: the grid's best, the band's ends, then each bracket in turn
+        value, omega = q[np.arange(which.size), i], grid[i]
+        for col, at in ((-2, lo), (-1, hi)):
+            take = ~(value >= q[:, col])
+            value, omega = np.where(take, q[:, col], value), np.where(take, at, omega)
+        for r in range(x.shape[1]):
+            take = use[:, r] & (v[:, r] > value)
+            value, omega = np.where(take, v[:, r], value), np.where(take, x[:, r], omega)
+        found[quantity] = value, omega
+    (kmax, w_kmax), (smax, w_smax) = found["K"], found["S"]
+    amp = np.abs(ds.amplitude[which])
+    force = ds.circuit.require_drive().kind == "force"
+    out = {"K_max": kmax, "omega_at_K_max": w_kmax, "K_min": 1.0 / smax,
+           "omega_at_K_min": w_smax, "Q0_max": amp if force else amp * smax,
+           "omega_at_Q0_max": np.full(which.size, lo) if force else w_smax}
+    return which[ok], {k: v[ok] for k, v in out.items()}
+
+
+def _golden_max(f, a: NDArray, b: NDArray, xtol: float = 1e-12) -> tuple[NDArray, NDArray]:
+    """The maximum of ``f`` in each bracket [a, b] (arrays of one shape, ``f`` evaluating
+    them all at once) by golden-section search until b − a ≤ ``xtol``·max|a|, |b|:
+    ``(x, f(x))``."""
+    span = np.max(b - a, initial=0.0)
+    tol = xtol * np.maximum(np.abs(a), np.abs(b))
+    x1, x2 = a + _GOLDEN * (b - a), b - _GOLDEN * (b - a)
+    f1, f2 = f(x1), f(x2)
+    steps = math.ceil(math.log(max(span / max(tol.min(initial=1.0), 1e-300), 1.0))
+                      / -math.log1p(-_GOLDEN)) if span > 0 else 0
+    for _ in range(steps):
+        left = f1 >= f2                   # the maximum lies in [a, x2]
+        a, b = np.where(left, a, x1), np.where(left, x2, b)
+        new = np.where(left, a + _GOLDEN * (b - a), b - _GOLDEN * (b - a))
+        fn = f(new)
+        x1, x2, f1, f2 = (np.where(left, new, x2), np.where(left, x1, new),
+                          np.where(left, fn, f2), np.where(left, f1, fn))
+    best = f1 >= f2
+    return np.where(best, x1, x2), np.where(best, f1, f2)
+
+
 def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances,
               ends: NDArray | None) -> DesignExtremes:
     D = ds.size
@@ -851,6 +935,10 @@ def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances,
                 out["Q0_max"][fast] = amp / out["K_min"][fast]
             out["omega_at_Q0_max"][fast] = out["omega_at_K_min"][fast]
     rest = np.setdiff1d(np.flatnonzero(~np.isin(np.arange(D), list(res.failed))), fast)
+    searched, found = _searched_extremes(ds, rest, lo, hi, res)
+    for name, values in found.items():
+        out[name][searched] = values
+    rest = np.setdiff1d(rest, searched)
 
     def peaks(d, c):
         # The design's resonances once for all three (omega_max None: all of them).

@@ -166,17 +166,38 @@ def test_extremes_of_a_lossless_design_against_a_fine_grid():
         np.testing.assert_array_equal(getattr(again, name), getattr(ex, name))
 
 
-def test_damped_designs_take_the_single_path_and_are_counted():
+def test_damped_designs_extremes_are_searched_at_once_as_peak_searches():
     params = {"c": np.array([1.0, 10.0])}
     ds = designs(DAMPED, params)
     ex = ds.extremes(np.geomspace(10, 1e3, 50))
-    assert list(ex.single) == [0, 1]
+    assert ex.single.size == 0
+    from mechcirc import peak
+
     for d in range(2):
         c = one(DAMPED, params, d)
-        from mechcirc import peak
+        # The same maximum to rounding (golden section against peak's Brent search,
+        # measured ≤ 1.2e-15); ω on its flat top to ≤ 3e-10 (measured).
+        for got, want in ((ex.Q0_max[d], peak(c, 10, 1e3, quantity="Q0")),
+                          (ex.K_max[d], peak(c, 10, 1e3, quantity="K")),
+                          (1 / ex.K_min[d], peak(c, 10, 1e3, quantity="S"))):
+            assert got == pytest.approx(want.value, rel=1e-14)
+        assert ex.omega_at_Q0_max[d] == pytest.approx(peak(c, 10, 1e3).omega, rel=1e-8)
 
-        assert ex.Q0_max[d] == peak(c, 10, 1e3, quantity="Q0").value
-        assert ex.K_max[d] == peak(c, 10, 1e3, quantity="K").value
+
+def test_batched_extremes_of_sharp_damped_peaks_against_mpmath():
+    # m1 a–0, k a–b, m2 b–0, c b–0: max |Q0| = V0·max |Z| located in mpmath
+    # (tests/test_sweep.py's reference), the resonance's ζ from 7e-6 to 0.21 (the last
+    # design's maximum at the band's top).
+    from test_sweep import _two_mass_max_impedance
+
+    text = ".param m1=1 m2=0.5 k=1e4 c=3\ndrive V a 0 velocity=2\nmass ma a 0 m1\n" \
+           "spring ka a b k\nmass mb b 0 m2\ndamper cb b 0 c\n"
+    c = np.geomspace(1e-3, 30, 6)
+    ex = designs(text, {"c": c}).extremes([10, 1000])
+    assert ex.single.size == 0
+    for d in range(c.size):
+        ref = _two_mass_max_impedance(1, 0.5, 1e4, c[d], ex.omega_at_Q0_max[d], 10, 1000)
+        assert ex.Q0_max[d] == pytest.approx(2 * ref, rel=1e-15)
 
 
 def test_extremes_of_damped_designs_reuse_resonances_computed_without_a_band(monkeypatch):
