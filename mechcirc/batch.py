@@ -41,8 +41,8 @@ from numpy.typing import ArrayLike, NDArray
 from ._memo import Memos
 from .circuit import Circuit, units_of
 from .errors import InputError, MechcircError, NotSeriesParallelError
-from ._sweep import (UNDAMPED_ZETA, real_omega, drive_force, drive_velocity, peak, point_flags,
-                     singular_error, singular_limits, sweep as sweep_one)
+from ._sweep import (UNDAMPED_ZETA, real_omega, drive_force, drive_velocity, golden_max, peak,
+                     point_flags, singular_error, singular_limits, sweep as sweep_one)
 from .reduction import evaluate_designs, plan
 from .resonances import (MAX_UNKNOWNS, MAX_UNKNOWNS_DAMPED, POLISH_BELOW, Resonance, batched_roots,
                          constraint_basis, design_values, element_patterns, find_resonances,
@@ -815,20 +815,15 @@ class DesignExtremes:
 _EXTREMES = ("K_min", "omega_at_K_min", "K_max", "omega_at_K_max", "Q0_max", "omega_at_Q0_max")
 
 
-#: (3 − √5)/2: the golden section's step, the fraction of a bracket dropped each evaluation.
-_GOLDEN = (3 - math.sqrt(5)) / 2
-
-
 def _searched_extremes(ds: Designs, which: NDArray, lo: float, hi: float,
                        res: DesignResonances) -> tuple[NDArray, dict]:
     """The extremes of damped series–parallel designs ``which``, located as
     :func:`mechcirc.peak` locates them (its 401-point grid, the band's ends, a
     bracket around the grid's best point and one of four half-power bandwidths
     around each damped root of the kind that makes the quantity peak) with every
-    design's brackets searched at once: a golden-section search to 1e-12 of ω on
-    the designs' own K (the plan at per-design points), where ``peak`` runs a
-    bounded Brent search per bracket (the same maximum to rounding; ω, on a
-    flat top, to about 1e-8).  Left out: all, if ``res`` does not reach the
+    design's brackets searched at once by :func:`mechcirc._sweep.golden_max`, as
+    ``peak`` searches one design's, on the designs' own K (the plan at
+    per-design points).  Left out: all, if ``res`` does not reach the
     band's top; designs with a lossless root in the band, or a K that is 0 or not
     finite where searched (``peak`` calls those unbounded).  Returns
     ``(designs solved, {extreme: values})``.
@@ -857,7 +852,7 @@ def _searched_extremes(ds: Designs, which: NDArray, lo: float, hi: float,
         b = np.minimum(np.column_stack([grid[np.minimum(i + 1, grid.size - 1)],
                                         centre + 4 * half]), hi)
         use = np.column_stack([np.ones(which.size, bool), roots]) & (a < b)
-        x, v = _golden_max(lambda om, sign=sign: np.abs(evaluate_designs(p, om)[0]) ** sign,
+        x, v = golden_max(lambda om, sign=sign: np.abs(evaluate_designs(p, om)[0]) ** sign,
                            np.where(use, a, lo), np.where(use, b, hi))
         ok &= (np.isfinite(v) | ~use).all(axis=1)
         # peak's order: the grid's best, the band's ends, then each bracket in turn
@@ -876,27 +871,6 @@ def _searched_extremes(ds: Designs, which: NDArray, lo: float, hi: float,
            "omega_at_K_min": w_smax, "Q0_max": amp if force else amp * smax,
            "omega_at_Q0_max": np.full(which.size, lo) if force else w_smax}
     return which[ok], {k: v[ok] for k, v in out.items()}
-
-
-def _golden_max(f, a: NDArray, b: NDArray, xtol: float = 1e-12) -> tuple[NDArray, NDArray]:
-    """The maximum of ``f`` in each bracket [a, b] (arrays of one shape, ``f`` evaluating
-    them all at once) by golden-section search until b − a ≤ ``xtol``·max|a|, |b|:
-    ``(x, f(x))``."""
-    span = np.max(b - a, initial=0.0)
-    tol = xtol * np.maximum(np.abs(a), np.abs(b))
-    x1, x2 = a + _GOLDEN * (b - a), b - _GOLDEN * (b - a)
-    f1, f2 = f(x1), f(x2)
-    steps = math.ceil(math.log(max(span / max(tol.min(initial=1.0), 1e-300), 1.0))
-                      / -math.log1p(-_GOLDEN)) if span > 0 else 0
-    for _ in range(steps):
-        left = f1 >= f2                   # the maximum lies in [a, x2]
-        a, b = np.where(left, a, x1), np.where(left, x2, b)
-        new = np.where(left, a + _GOLDEN * (b - a), b - _GOLDEN * (b - a))
-        fn = f(new)
-        x1, x2, f1, f2 = (np.where(left, new, x2), np.where(left, x1, new),
-                          np.where(left, fn, f2), np.where(left, f1, fn))
-    best = f1 >= f2
-    return np.where(best, x1, x2), np.where(best, f1, f2)
 
 
 def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances,

@@ -796,9 +796,17 @@ def _symmetric_eigvals(A: np.ndarray) -> np.ndarray:
 def _damped(M, D, K, vectors: bool = False) -> tuple:
     """Finite eigenvalues s of (s² M + s D + K) v = 0 by a companion linearisation.
 
+    With no direction free of both mass and damping (:func:`_condensed`), each
+    massless direction is one infinite root: the 2n − dim null(M) roots of least
+    |s| are the finite ones.  A threshold on |β/α| cannot tell them: QZ put an
+    infinite root at 3.3e11·√(k/m), which then swamped every estimate and
+    cancelled a resonance (``tests/test_resonances.py``).
+
     Returns ``(s, V)``: ``V`` the eigenvectors v (columns) with ``vectors``, else None.
     """
     n = M.shape[0]
+    mu = np.linalg.eigvalsh(M)
+    massless = int(np.sum(mu <= 1e-13 * max(mu.max(initial=0.0), 1e-300)))
     eye, zero = np.eye(n), np.zeros((n, n))
     A = np.block([[zero, eye], [-K, -D]])
     B = np.block([[eye, zero], [zero, M]])
@@ -806,7 +814,11 @@ def _damped(M, D, K, vectors: bool = False) -> tuple:
 
     out = eig(A, B, right=vectors, homogeneous_eigvals=True)
     alpha, beta = out[0] if vectors else out
-    finite = np.abs(beta) > 1e-12 * np.abs(alpha)
+    with np.errstate(all="ignore"):
+        size = np.where(beta != 0, np.abs(alpha) / np.abs(beta), np.inf)
+    finite = np.zeros(2 * n, dtype=bool)
+    finite[np.argsort(size, kind="stable")[:2 * n - massless]] = True
+    finite &= np.isfinite(size)
     s = alpha[finite] / beta[finite]
     if not vectors:
         return s, None
