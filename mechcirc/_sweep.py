@@ -774,6 +774,8 @@ def _peak_search(circuit, method, quantity, lo, hi, brackets, best_value, best_o
         for xi, vi in zip(x.tolist(), v.tolist()):
             if vi > best_value or not np.isfinite(best_value):
                 best_value, best_omega = vi, xi
+        if best_omega in x:               # solved alone, as a sweep at that ω gives it
+            best_value = float(magnitude([best_omega])[0])
     return best_value, best_omega
 
 
@@ -791,18 +793,23 @@ def golden_max(f, a: NDArray, b: NDArray, xtol: float = 1e-12) -> tuple[NDArray,
     bounded ``minimize_scalar``) runs bracket by bracket and stops at √eps·|x|: on a
     sharp peak (ζ ≈ 1e-5) that left |q| 5.7e-10 below its top.
     """
-    span = np.max(b - a, initial=0.0)
     tol = np.minimum(xtol * np.maximum(np.abs(a), np.abs(b)), 1e-9 * (b - a))
+    # Each bracket's own number of steps: its result does not depend on the others.
+    with np.errstate(all="ignore"):
+        steps = np.ceil(np.log(np.maximum((b - a) / np.maximum(tol, 1e-300), 1.0))
+                        / -math.log1p(-_GOLDEN))
     x1, x2 = a + _GOLDEN * (b - a), b - _GOLDEN * (b - a)
     f1, f2 = f(x1), f(x2)
-    steps = math.ceil(math.log(max(span / max(tol.min(initial=1.0), 1e-300), 1.0))
-                      / -math.log1p(-_GOLDEN)) if span > 0 else 0
-    for _ in range(steps):
-        left = f1 >= f2                   # the maximum lies in [a, x2]
-        a, b = np.where(left, a, x1), np.where(left, x2, b)
+    for i in range(int(np.max(steps, initial=0))):
+        go = i < steps
+        left = go & (f1 >= f2)            # the maximum lies in [a, x2]
+        right = go & ~left
+        a, b = np.where(right, x1, a), np.where(left, x2, b)
         new = np.where(left, a + _GOLDEN * (b - a), b - _GOLDEN * (b - a))
         fn = f(new)
-        x1, x2, f1, f2 = (np.where(left, new, x2), np.where(left, x1, new),
-                          np.where(left, fn, f2), np.where(left, f1, fn))
+        x1, x2, f1, f2 = (np.where(left, new, np.where(right, x2, x1)),
+                          np.where(left, x1, np.where(right, new, x2)),
+                          np.where(left, fn, np.where(right, f2, f1)),
+                          np.where(left, f1, np.where(right, fn, f2)))
     best = f1 >= f2
     return np.where(best, x1, x2), np.where(best, f1, f2)
