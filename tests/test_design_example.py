@@ -28,11 +28,17 @@ C4 = 80.0                                                             # the rod'
 STROKE, RISE, DWELL, RETURN = 0.08, 100.0, 80.0, 120.0
 
 
-def parts(s, k4, lib=np):
+def parts(s, k4, lib=np, eta1=None):
     """(K, K_par, K_chain) at complex frequency s: K seen by the drive, K of the three
-    parallel branches below node D, and of the branch m6..m12 + (k0 | c0)."""
-    K = sum(1 / (s * m * eta) for m, eta in SERIES)
-    S5 = ETA_C * (k4 / s + C4)
+    parallel branches below node D, and of the branch m6..m12 + (k0 | c0); ``eta1``
+    another value of that lever ratio (the netlist's etaB and etaC follow it)."""
+    series, eta_c = SERIES, ETA_C
+    if eta1 is not None:
+        eta_b = eta1 ** 2 * 1.25
+        eta_c = eta_b * 0.9 ** 2
+        series = [(2.0, 1.0), (1.5, eta1 ** 2), (1.2, eta_b), (0.9, eta_c)]
+    K = sum(1 / (s * m * eta) for m, eta in series)
+    S5 = eta_c * (k4 / s + C4)
     K67 = 1 / (s * M5) + 1 / (K5 / s + C5)
     Kchain = sum(1 / (s * m) for m in CHAIN) + 1 / (K0 / s + C0)
     Kpar = 1 / (S5 + 1 / K67 + 1 / Kchain)
@@ -189,3 +195,42 @@ def test_the_example_runs(capsys, monkeypatch):
     status, out, err = run_script(REPO / "examples" / "heald_design.py", [], capsys, monkeypatch)
     assert status == 0, out + err
     assert "exact re-solve: 16.88%" in out
+
+
+def _band_min_abs_K(eta1, lo=470.0, hi=560.0):
+    """min |K(jω)| over [lo, hi] of the closed form: a 20,001-point grid, then a
+    golden-section search in mpmath (30 digits) between the grid's neighbours."""
+    w = np.linspace(lo, hi, 20001)
+    i = int(np.argmin(np.abs(parts(1j * w, 5e5, eta1=eta1)[0])))
+    with mpmath.workdps(30):
+        def f(x):
+            return abs(parts(mpmath.mpc(0, x), mpmath.mpf(5e5), mpmath, eta1)[0])
+
+        a, b = mpmath.mpf(w[max(i - 1, 0)]), mpmath.mpf(w[min(i + 1, w.size - 1)])
+        g = (3 - mpmath.sqrt(5)) / 2
+        for _ in range(150):
+            x1, x2 = a + g * (b - a), b - g * (b - a)
+            a, b = (a, x2) if f(x1) <= f(x2) else (x1, b)
+        return float(f((a + b) / 2))
+
+
+def test_the_lever_variant_against_the_closed_form():
+    """docs/design.md §5: the batch's first resonance at eta1 = 0.8 and 0.879 is the
+    closed form's zero, and its least |K| over 470 … 560 rad/s (the drive force's
+    peak, |Q0| = |V0|/|K|) the closed form's."""
+    from mechcirc.batch import designs
+
+    etas = (0.8, 0.879)
+    ds = designs(NETLIST.read_text(), {"eta1": np.array(etas)})
+    res = ds.resonances(omega_max=600)
+    ex = ds.extremes([470.0, 560.0], resonances=res)
+    for d, eta1 in enumerate(etas):
+        r = min((x for x in res.list(d) if x.kind == "resonance"), key=lambda x: x.omega)
+        with mpmath.workdps(30):
+            s = complex(mpmath.findroot(lambda z: parts(z, mpmath.mpf(5e5), mpmath, eta1)[0],
+                                        mpmath.mpc(complex(-r.zeta * r.omega, r.omega_d))))
+        assert abs(abs(s) - r.omega) <= 1e-12 * r.omega
+        assert ex.K_min[d] == pytest.approx(_band_min_abs_K(eta1), rel=1e-14)   # 4.4e-16
+    assert 534.07 < res.list(1)[0].omega < 534.5          # just past 8.5 Ω: 534.27
+    assert ex.Q0_max[1] / ex.Q0_max[0] == pytest.approx(ex.K_min[0] / ex.K_min[1], rel=1e-14)
+    assert 1.24 < ex.Q0_max[1] / ex.Q0_max[0] < 1.26            # "by a quarter"
