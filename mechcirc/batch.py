@@ -843,7 +843,8 @@ def _searched_extremes(ds: Designs, which: NDArray, lo: float, hi: float,
     for quantity, kind, sign in (("K", "antiresonance", 1), ("S", "resonance", -1)):
         roots = band & (res.kind[which] == kind)
         ok &= ~(roots & (zeta <= UNDAMPED_ZETA)).any(axis=1)
-        q = absK ** sign
+        with np.errstate(divide="ignore"):     # |K| = 0: those designs are not ok
+            q = absK ** sign
         i = np.argmax(q[:, :-2], axis=1)
         centre = np.where(wd > 0, wd, w)
         with np.errstate(invalid="ignore"):
@@ -852,8 +853,9 @@ def _searched_extremes(ds: Designs, which: NDArray, lo: float, hi: float,
         b = np.minimum(np.column_stack([grid[np.minimum(i + 1, grid.size - 1)],
                                         centre + 4 * half]), hi)
         use = np.column_stack([np.ones(which.size, bool), roots]) & (a < b)
-        x, v = golden_max(lambda om, sign=sign: np.abs(evaluate_designs(p, om)[0]) ** sign,
-                           np.where(use, a, lo), np.where(use, b, hi))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            x, v = golden_max(lambda om, sign=sign: np.abs(evaluate_designs(p, om)[0]) ** sign,
+                              np.where(use, a, lo), np.where(use, b, hi))
         ok &= (np.isfinite(v) | ~use).all(axis=1)
         # peak's order: the grid's best, the band's ends, then each bracket in turn
         value, omega = q[np.arange(which.size), i], grid[i]
