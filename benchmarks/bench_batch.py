@@ -22,7 +22,7 @@ It checks that both agree (K, roots) and prints the per-design times and their
 ratio (goal ≤ 2×).  The compiled kernel is loaded before timing.  It prints; it
 asserts nothing.  Run from the repository root::
 
-    python benchmarks/bench_batch.py [--big] [--repeats N] [--no-numba] [--nodal | --damped]
+    python benchmarks/bench_batch.py [--big] [--repeats N] [--no-numba] [--nodal | --damped | --levers]
 
 ``--nodal``: instead, a bridge network (not series–parallel: the nodal path)
 over a grid of three parameters, D = 100 and 1,000 designs, 200 ω, K with its
@@ -42,6 +42,10 @@ a massless direction with the drive released) over a grid of eta1 and eta3,
 D = 100 and 1,000: its resonances stacked against ``find_resonances`` one
 design at a time, as for the bridge, and its extremes over 50 … 5,000 rad/s
 (resonances given) against ``mechcirc.peak`` design by design.
+
+``--levers``: instead, a lever whose ratio r is a parameter (with and without a
+damper) over a grid of r and a mass, D = 100 and 1,000: resonances stacked (a
+constraint basis per design) against ``find_resonances`` one by one.
 
 ``--no-numba`` hides numba (``sys.modules["numba"] = None`` before mechcirc is
 imported), as in an install without it: the batch then runs in numpy.
@@ -215,6 +219,29 @@ def damped_heald(repeats):
         extremes_against_one_by_one(text, params, repeats)
 
 
+#: A lever whose ratio r is a parameter, with a damper (--levers).
+LEVERED = """\
+.param r=2 m=1.5 k=4e4 c=3
+drive V a 0 velocity=0.2
+mass  m1 a 0 {m} kg
+spring k1 a b {k/1000} N/mm
+lever L b 0 c 0 ratio=r
+mass  m2 c 0 0.4
+spring k2 c 0 {2*k}
+damper d1 b 0 c
+"""
+
+
+def levers(repeats):
+    """Designs whose lever ratio varies (--levers): stacked against one by one."""
+    for label, text in (("damped", LEVERED), ("undamped", LEVERED.replace("damper d1 b 0 c\n", ""))):
+        for D in (100, 1_000):
+            n = round(D ** 0.5)
+            g = np.meshgrid(np.linspace(0.3, 4.0, n), np.geomspace(0.3, 3.0, D // n))
+            resonances_against_one_by_one(label, text, dict(zip(("r", "m"), (
+                x.ravel() for x in g))), repeats)
+
+
 def extremes_against_one_by_one(text, params, repeats, band=(50.0, 5000.0), alone=100):
     """``Designs.extremes`` (resonances given) against ``mechcirc.peak`` (K, S and Q0)
     design by design on ``alone`` of them, alternated, per design, with the largest
@@ -286,6 +313,8 @@ def main():
                     help="a bridge network on the nodal path: stacked against one by one")
     ap.add_argument("--damped", action="store_true",
                     help="heald_damped.mcir's resonances: stacked against one by one")
+    ap.add_argument("--levers", action="store_true",
+                    help="a lever whose ratio varies: resonances stacked against one by one")
     ap.add_argument("--no-numba", action="store_true",
                     help="hide numba (read before import, see the docstring)")
     args = ap.parse_args()
@@ -300,8 +329,8 @@ def main():
     print(f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
           f"numpy {np.__version__}, scipy {scipy.__version__}, {compiled}; "
           f"load {os.getloadavg()[0]:.2f}")
-    if args.nodal or args.damped:
-        (nodal if args.nodal else damped_heald)(args.repeats)
+    if args.nodal or args.damped or args.levers:
+        (nodal if args.nodal else damped_heald if args.damped else levers)(args.repeats)
         print(f"load after: {os.getloadavg()[0]:.2f}")
         return
     rng = np.random.default_rng(21)

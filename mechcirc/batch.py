@@ -380,7 +380,8 @@ class Designs(Memos):
         secant on the design's own K(s) from the stacked nodal solve
         (:func:`_nodal_roots`).  The others (an undamped mass matrix too close to
         singular, or a damped one that is singular beyond the reversed problem's
-        reach, levers whose ratio varies, a mode in both the
+        reach, levers whose ratio varies in a network that is not series–parallel,
+        a mode in both the
         held and released problems) go through
         :func:`mechcirc.resonances.find_resonances` one by one (``single``).
         """

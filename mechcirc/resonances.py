@@ -985,7 +985,8 @@ def batched_roots(ds, omega_max: float | None = None):
     by step on stacks.
 
     The same stamps (:func:`mechcirc.nodal.stamps`), projections
-    (:func:`constraint_basis`), scaling and filters as :func:`_modes`; the
+    (:func:`constraint_basis`; one per design where the lever ratios vary,
+    :func:`design_bases`), scaling and filters as :func:`_modes`; the
     massless directions, structural, are condensed out once for all designs and
     each pencil reduced by a batched Cholesky factorisation of its mass matrix
     (:func:`_undamped_stack`); all designs are solved by one stacked
@@ -996,8 +997,8 @@ def batched_roots(ds, omega_max: float | None = None):
     Damped designs: :func:`_stacked_damped` (massless directions: :func:`_shifted_roots`).
 
     Returns ``(designs, pole, s, error)`` for the designs it solves
-    (series–parallel, a mass matrix it can reduce, the template's lever ratios,
-    no mode in both problems): the roots s (jω undamped), each row sorted as
+    (series–parallel, a mass matrix it can reduce, lever pivots that suit the
+    design, no mode in both problems): the roots s (jω undamped), each row sorted as
     :func:`find_resonances` sorts, NaN-padded, ``pole`` true for
     anti-resonances; None when it solves none (the caller solves the others
     one by one).
@@ -1010,7 +1011,7 @@ def batched_roots(ds, omega_max: float | None = None):
         system = ds.circuit.nodal
     except (NotSeriesParallelError, TopologyError):
         return None
-    which = template_levers(ds, system, np.flatnonzero(ds.valid))   # the projection needs them
+    which = np.flatnonzero(ds.valid)
     if not which.size:
         return None
     n_nodes = len(system.nodes)
@@ -1018,11 +1019,13 @@ def batched_roots(ds, omega_max: float | None = None):
     *_, G_released, G_held, damped = pencil(system, dense=True)
     B = element_patterns(system)
     S = design_values(ds, system, which)
-    problems = [stacked_problem(constraint_basis(G, n_nodes, dense=True), B, S, damped,
-                                omega_max)
-                for G in (G_held, G_released)]
+    # One basis for all when the lever ratios are the template's, else one per design.
+    shared = template_levers(ds, system, which).size == which.size
+    bases = [(constraint_basis(G, n_nodes, dense=True), True) if shared
+             else design_bases(ds, system, G, which) for G in (G_held, G_released)]
+    problems = [stacked_problem(Z, B, S, damped, omega_max) for Z, _ in bases]
     (w_h, e_h, _), (w_r, e_r, _) = problems
-    keep = np.flatnonzero(shared_roots_free(problems, damped))
+    keep = np.flatnonzero(shared_roots_free(problems, damped) & bases[0][1] & bases[1][1])
     if not keep.size:
         return None
     pole, s, err = sorted_roots(*held_and_released(w_h[keep], w_r[keep], e_h[keep], e_r[keep]))
@@ -1085,23 +1088,65 @@ def element_patterns(system) -> dict[str, np.ndarray]:
 
 
 def stacked_problem(Z, B, S, damped: bool, omega_max):
-    """The roots of one stacked eigenproblem (constraint basis ``Z``, patterns ``B``,
-    element values ``S`` per design): :func:`_stacked_damped` or :func:`_stacked_modes`."""
-    if not Z.shape[1]:                      # nothing left to move: no roots, solved
-        D = S.shape[0]
+    """The roots of one stacked eigenproblem (constraint basis ``Z``, one for all designs
+    (n, k) or one per design (D, n, k), :func:`design_bases`; patterns ``B``, element
+    values ``S`` per design): :func:`_stacked_damped` or :func:`_stacked_modes`."""
+    D = S.shape[0]
+    if not Z.shape[-1]:                     # nothing left to move: no roots, solved
         return np.zeros((D, 0), complex if damped else float), np.zeros((D, 0)), \
             np.ones(D, dtype=bool)
     if damped:
-        Mr, Dr, Kr = (_weighted_sum(S, Z.T @ B[x] @ Z) for x in ("mass", "damper", "spring"))
+        Mr, Dr, Kr = (_projected(Z, B[x], S) for x in ("mass", "damper", "spring"))
         return _stacked_damped(Mr, Dr, Kr, omega_max)
     # The massless directions are those of the pattern: with every value > 0,
     # null(Σ m_e B_e) = ∩ null(B_e) in every design.  Ordered last, they are
     # condensed out statically (_undamped_stack), as _undamped does per design.
-    mu, V = np.linalg.eigh(Z.T @ B["mass"].sum(axis=0) @ Z)
-    massless = mu <= 1e-10 * max(mu.max(), 1e-300)
-    Z = Z @ np.concatenate([V[:, ~massless], V[:, massless]], axis=1)
-    Mr, Kr = (_weighted_sum(S, Z.T @ B[x] @ Z) for x in ("mass", "spring"))
-    return _stacked_modes(Mr, Kr, int(massless.sum()), omega_max)
+    mu, V = np.linalg.eigh(np.swapaxes(Z, -1, -2) @ B["mass"].sum(axis=0) @ Z)
+    massless = mu <= 1e-10 * np.maximum(mu.max(axis=-1, keepdims=True), 1e-300)
+    order = np.argsort(massless, axis=-1, kind="stable")        # the massless last
+    Z = Z @ np.take_along_axis(V, order[..., None, :], axis=-1)
+    n0 = massless.sum(axis=-1)
+    Mr, Kr = (_projected(Z, B[x], S) for x in ("mass", "spring"))
+    w, e, ok = _stacked_modes(Mr, Kr, int(np.max(n0)), omega_max)
+    return w, e, ok & (n0 == np.max(n0))          # per-design bases: the same count
+
+
+def _projected(Z, B: np.ndarray, S: np.ndarray) -> np.ndarray:
+    """Zᵀ (Σ_e S[:, e] B_e) Z of every design, (D, k, k): the patterns projected once for
+    a shared basis Z (n, k), or each design's matrix projected on its own Z (D, n, k)."""
+    if Z.ndim == 2:
+        return _weighted_sum(S, Z.T @ B @ Z)
+    return np.swapaxes(Z, 1, 2) @ _weighted_sum(S, B) @ Z
+
+
+def design_bases(ds, system, G: np.ndarray, which: np.ndarray) -> tuple:
+    """Constraint bases Z_d (D', n, k) of designs ``which`` whose lever ratios differ:
+    ``G``'s lever rows (the first ``len(system.levers)``, :func:`pencil`) stamped with
+    each design's ratios, and every design's unknowns eliminated at the pivots the
+    template's pivoted QR chooses (:func:`constraint_basis`), v_p = −G_p⁺ G_f v_f.
+    Returns ``(Z, ok)``: ``ok`` false where those pivots are ill-conditioned for the
+    design (G_p's singular values more than 1e8 apart), which the single path takes."""
+    import scipy.linalg as la
+
+    n, L = G.shape[1], len(system.levers)
+    index = {name: i for i, name in enumerate(system.nodes)}
+    lev = {lv.name: i for i, lv in enumerate(ds.circuit.levers)}
+    Gd = np.repeat(G[None], which.size, axis=0)
+    Gd[:, :L] = 0.0
+    for _, r, c, sign, lever, ratio in nodal.stamps((), system.levers, index):
+        if r >= n:                                  # a constraint row's entry
+            Gd[:, r - n, c] += sign * (ds.ratios[lev[lever.name], which] if ratio else 1.0)
+    _, R, perm = la.qr(G, mode="economic", pivoting=True)
+    rank = int(np.sum(np.abs(np.diag(R)) > 1e-12 * np.abs(R).max()))
+    pivots = np.sort(perm[:rank])
+    free = np.setdiff1d(np.arange(n), pivots)
+    Gp, Gf = Gd[:, :, pivots], Gd[:, :, free]
+    sv = np.linalg.svd(Gp, compute_uv=False)
+    ok = sv[:, rank - 1] > 1e-8 * sv[:, 0] if rank else np.ones(which.size, dtype=bool)
+    Z = np.zeros((which.size, n, free.size))
+    Z[:, free, np.arange(free.size)] = 1.0
+    Z[:, pivots, :] = -np.linalg.pinv(Gp, rcond=_EPS) @ Gf
+    return Z, ok
 
 
 def held_and_released(s_h, s_r, err_h, err_r) -> tuple:

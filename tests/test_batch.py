@@ -79,8 +79,9 @@ def test_flags_and_singular_points_match():
 @pytest.mark.parametrize("text, params, n_batched", [
     (STB.read_text(), stb_params(40, 2), 40),            # singular M: condensed
     (LEVER, {"m": np.geomspace(0.1, 10, 9)}, 9),          # regular M: Cholesky
-    (LEVER, {"r": np.array([0.5, 2.0, 3.0])}, 1),         # ratio varies: one by one but r = 2
+    (LEVER, {"r": np.array([0.5, 2.0, 3.0])}, 3),         # ratio varies: a basis per design
     (DAMPED, {"c": np.geomspace(1e-2, 1e2, 5)}, 5),       # dampers: stacked eigvals + Newton
+    (DAMPED, {"c": np.geomspace(1e-2, 1e2, 5), "r": np.linspace(0.3, 4, 5)}, 5),   # both
 ])
 def test_batched_resonances_are_find_resonances(text, params, n_batched):
     ds = designs(text, params)
