@@ -514,3 +514,19 @@ def test_the_mode_of_a_chain_with_a_direction_free_of_mass_and_damping():
     x = np.array([m.shape[f"n{i}"] for i in range(1, 6)])
     P = m.s ** 2 * Mf + m.s * Df + Kf
     assert np.linalg.norm(P @ x) <= 1e-14 * np.linalg.norm(P) * np.linalg.norm(x)
+
+
+def test_a_mass_beyond_float64s_reach_gives_no_root_at_infinity():
+    # Found by the fuzz run (seed 526, MECHCIRC_FUZZ_BUDGET=3): a mass of 7e-320 kg
+    # (5e-324 × η) on a damped node.  Counting the finite roots (2n − dim null(M))
+    # alone kept its root at s ≈ −1e325, reported as a resonance at ω = inf.
+    text = ("damper e7 n1 n2 p1\nmass e5 n2 0 2.6617586301559553\n"
+            "mass e3 n1 n2 5e-324 eta=14128.391215371421\n"
+            "damper e0 n2 0 453.0450639309078 eta=913.8981931279263\nmass e4 n2 0 {1e-308}\n"
+            ".param p1=7570.856909971435 p2={p1*2}\ndamper e1 n2 0 9207.135929792867\n"
+            "drive V n2 0 force=0\ndamper e6 0 n1 p1\ndamper e2 0 n1 123602.49957714093\n")
+    import warnings
+
+    with warnings.catch_warnings(action="ignore"):
+        found = mechcirc.parse(text).resonances()
+    assert found and all(math.isfinite(r.omega) and math.isfinite(r.zeta) for r in found)
