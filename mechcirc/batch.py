@@ -315,7 +315,7 @@ class Designs(Memos):
         # The last designs' plan is kept (a memo, never pickled): sweep, extremes and
         # resonances share it.
         key = which.tobytes()
-        return self.memo("_plan", lambda: (key, self._plan(which)),
+        return self.memo("_plan_memo", lambda: (key, self._plan(which)),
                          lambda kept: kept[0] == key)[1]
 
     def _plan(self, which: NDArray):

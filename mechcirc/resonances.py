@@ -1270,7 +1270,7 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
     # M⁻¹ = L⁻ᵀ L⁻¹ by Cholesky where M is safely definite (``definite``).
     definite = ok.copy()
     _, Linv = _stacked_cholesky_inverse(Ms, definite)
-    sig = np.linalg.eigvals(_companion(Linv, Ds, Ks))   # s / w_ref
+    sig = np.linalg.eigvals(_companion(Linv, Ds, Ks, ok))   # s / w_ref
     finite = np.ones(sig.shape, dtype=bool)
     shifted = np.flatnonzero(ok & ~definite)
     if shifted.size:
@@ -1284,6 +1284,7 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
         gap[:, np.arange(2 * k), np.arange(2 * k)] = np.inf
         near = np.minimum(np.sqrt(_EPS), _EPS / (gap.min(axis=2) / mag))
     sig, step, kappa = _newton_det(np.where(live, sig, 1.0 + 0j), live, Ms, Ds, Ks)
+    ok[np.nonzero(live)[0][~np.isfinite(kappa)]] = False     # beyond float64: one by one
     mag = np.abs(sig)
     with np.errstate(all="ignore"):
         # Newton on det P in float64 cannot beat the rounding of P(s) itself, about
@@ -1302,14 +1303,19 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
     return s, err, ok
 
 
-def _companion(Linv: np.ndarray, Ds: np.ndarray, Ks: np.ndarray) -> np.ndarray:
-    """The companion matrices [[0, I], [−M⁻¹K, −M⁻¹D]] of a stack, M⁻¹ = L⁻ᵀ L⁻¹."""
+def _companion(Linv: np.ndarray, Ds: np.ndarray, Ks: np.ndarray, ok: np.ndarray) -> np.ndarray:
+    """The companion matrices [[0, I], [−M⁻¹K, −M⁻¹D]] of a stack, M⁻¹ = L⁻ᵀ L⁻¹; ``ok``
+    (updated in place) loses a design whose matrix leaves float64 (zeros in its place)."""
     k = Ks.shape[1]
-    Minv = np.swapaxes(Linv, 1, 2) @ Linv
-    A = np.zeros((Ks.shape[0], 2 * k, 2 * k))
-    A[:, :k, k:] = np.eye(k)
-    A[:, k:, :k] = -(Minv @ Ks)
-    A[:, k:, k:] = -(Minv @ Ds)
+    with np.errstate(all="ignore"):
+        Minv = np.swapaxes(Linv, 1, 2) @ Linv
+        A = np.zeros((Ks.shape[0], 2 * k, 2 * k))
+        A[:, :k, k:] = np.eye(k)
+        A[:, k:, :k] = -(Minv @ Ks)
+        A[:, k:, k:] = -(Minv @ Ds)
+    bad = ~np.isfinite(A).all(axis=(1, 2))
+    ok &= ~bad
+    A[bad] = 0.0
     return A
 
 
@@ -1328,8 +1334,9 @@ def _shifted_roots(Ms: np.ndarray, Ds: np.ndarray, Ks: np.ndarray) -> tuple:
     P, Dp = Ms + Ds + Ks, 2 * Ms + Ds
     ok = np.ones(Ms.shape[0], dtype=bool)
     _, Linv = _stacked_cholesky_inverse(P, ok)
-    mu = np.linalg.eigvals(_companion(Linv, Dp, Ms))
-    size = np.abs(mu) / np.abs(mu).max(axis=1, initial=0.0)[:, None]
+    mu = np.linalg.eigvals(_companion(Linv, Dp, Ms, ok))
+    with np.errstate(all="ignore"):
+        size = np.abs(mu) / np.abs(mu).max(axis=1, initial=0.0)[:, None]
     finite = size >= 1e-6
     ok &= ~((size > 1e-10) & ~finite).any(axis=1)
     with np.errstate(all="ignore"):
@@ -1394,12 +1401,14 @@ def _condition(s, x, M, D, K) -> np.ndarray:
     """The normwise relative condition number of roots s of P(s) = s²M + sD + K
     (Tisseur, 2000): κ = (|s|²‖M‖ + |s|‖D‖ + ‖K‖)‖x‖² / (|s| |xᵀ P'(s) x|), x the null
     vector of P(s) (M, D and K are symmetric, so the left one is x̄; rows not finite:
-    from the singular value decomposition), Frobenius norms (≥ the 2-norms)."""
+    from the singular value decomposition), Frobenius norms (≥ the 2-norms); NaN where
+    P(s) leaves float64."""
     z = s[:, None, None]
-    exact = np.flatnonzero(~np.isfinite(x).all(axis=1))
+    with np.errstate(all="ignore"):
+        P = z ** 2 * M + z * D + K
+    exact = np.flatnonzero(~np.isfinite(x).all(axis=1) & np.isfinite(P).all(axis=(1, 2)))
     if exact.size:                                  # P(s) exactly singular: its SVD's
-        P = z[exact] ** 2 * M[exact] + z[exact] * D[exact] + K[exact]
-        x[exact] = np.linalg.svd(P)[2][:, -1, :].conj()
+        x[exact] = np.linalg.svd(P[exact])[2][:, -1, :].conj()
     with np.errstate(all="ignore"):
         dP = np.einsum("ri,rij,rj->r", x, 2 * z * M + D, x)
         norm = [np.sqrt(np.sum(np.abs(X) ** 2, axis=(1, 2))) for X in (M, D, K)]
