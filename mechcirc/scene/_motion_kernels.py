@@ -512,33 +512,46 @@ def locate(t, hh, y, k1, ynew, k4, tmp, dy, sw0, sw1, reg, regn, PV, FI, FF, tab
     for e in range(nsw):
         if reg[e] == regn[e]:
             continue
-        lo, hi, vd = 0.0, 1.0, 0.0
+        lo, hi, v, vd, s = 0.0, 1.0, 0.0, 0.0, 0.0
         r0, r1 = reg[e], regn[e]
-        glo = edge_gap(e, ne, r0, r1, sw0[e], sw0[nsw + e] if e < ne else 0.0, EF, MOF)
-        ghi = edge_gap(e, ne, r0, r1, sw1[e], sw1[nsw + e] if e < ne else 0.0, EF, MOF)
-        if ghi == 0.0:      # on the edge at the step's end: the change is there, no cut
-            continue
-        g0, g1, side = glo, ghi, 0
-        for it in range(60):
-            if hi - lo <= 1e-9 or hi <= 0.0:
-                break
-            s = hi - ghi * (hi - lo) / (ghi - glo) if ghi != glo else 0.5 * (lo + hi)
-            probing = it == 0 and 0.0 < probe < 1.0
-            if probing:
-                s = 1.0 - probe
-            elif it == (probe > 0.0) and e < ne and r0 * r1 <= 0:
-                s = gap_root(g0, g1, hh * sw0[nsw + e], hh * sw1[nsw + e], s)
-            if not lo < s < hi:
-                s = 0.5 * (lo + hi)
-            hermite_point(tmp, s, hh, y, k1, ynew, k4, n, m)
-            deriv(t + s * hh, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy,
-                  aux, work, zy, zd)
-            count += 1
-            if e < ne:
-                v, vd = aux[off + e], aux[xo + e]
+        glo = ghi = g0 = g1 = 0.0
+        side = 0
+        # it = -2, -1: the gaps at the step's ends (sw0, sw1), through the loop's one
+        # edge_gap site (numba's inlining copies it, with its whole scope, at every site)
+        for it in range(-2, 60):
+            probing = False
+            if it < 0:
+                sw = sw0 if it == -2 else sw1
+                v, vd = sw[e], sw[nsw + e] if e < ne else 0.0
             else:
-                v = work[6, MOI[e - ne, 0]] - MOF[e - ne, 3] + 0.5 * MOF[e - ne, 1]
+                if hi - lo <= 1e-9 or hi <= 0.0:
+                    break
+                s = hi - ghi * (hi - lo) / (ghi - glo) if ghi != glo else 0.5 * (lo + hi)
+                probing = it == 0 and 0.0 < probe < 1.0
+                if probing:
+                    s = 1.0 - probe
+                elif it == (probe > 0.0) and e < ne and r0 * r1 <= 0:
+                    s = gap_root(g0, g1, hh * sw0[nsw + e], hh * sw1[nsw + e], s)
+                if not lo < s < hi:
+                    s = 0.5 * (lo + hi)
+                hermite_point(tmp, s, hh, y, k1, ynew, k4, n, m)
+                deriv(t + s * hh, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI,
+                      dy, aux, work, zy, zd)
+                count += 1
+                if e < ne:
+                    v, vd = aux[off + e], aux[xo + e]
+                else:
+                    v = work[6, MOI[e - ne, 0]] - MOF[e - ne, 3] + 0.5 * MOF[e - ne, 1]
             g = edge_gap(e, ne, r0, r1, v, vd, EF, MOF)
+            if it == -2:
+                glo = g
+                continue
+            if it == -1:
+                ghi = g
+                if ghi == 0.0:  # on the edge at the step's end: the change is there, no cut
+                    break       # (hi stays 1: best unchanged)
+                g0, g1 = glo, ghi
+                continue
             if (g > 0.0) == (ghi > 0.0) and g != 0.0:
                 hi, ghi = s, g
                 if side == 1:
@@ -716,62 +729,96 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
 
 
 @_jit
-def outputs(ts, ys, out, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI):
-    """Evaluate aux at each stored state into ``out`` (its column i the state i's aux, so that
-    each output is a contiguous row)."""
+def output_pass(ts, ys, out, mode, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI):
+    """The equations at each stored state ys[i]: one kernel for :func:`outputs` (``mode`` 0:
+    aux into ``out``, its column i the state i's aux, so that each output is a contiguous
+    row), :func:`output_extrema` (1: the least (row 0) and largest (row 1) of each aux column,
+    as the rows would give them; a NaN stays NaN) and :func:`shaft_eval` (2: the shaft's, ts
+    unused); each compiled kernel emits the equations' code again."""
     n = ys.shape[1]
+    naux = out.shape[0] if mode == 0 else out.shape[1] - (5 if mode == 2 else 0)
     dy, y = np.empty(n), np.empty(n)
-    aux = np.empty(out.shape[0])
+    aux = np.empty(naux)
     work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
-    for i in range(ts.shape[0]):
+    zy = np.empty(2 * PRIG.shape[0] - 2)
+    zd = np.empty(zy.shape[0])
+    if mode == 1:
+        for j in range(naux):
+            out[0, j] = np.inf
+            out[1, j] = -np.inf
+    for i in range(ys.shape[0]):
         for j in range(n):      # a copy, not the view ys[i] (two atomic reference counts)
             y[j] = ys[i, j]
+        if mode == 2:
+            acc = shaft_rhs(0.0, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy,
+                            aux, work, zy, zd)
+            for j in range(naux):
+                out[i, j] = aux[j]
+            out[i, naux] = acc
+            out[i, naux + 1] = motor_torque(PV, PV[0], 12)
+            out[i, naux + 2] = work[3, 0]
+            out[i, naux + 3] = work[4, 0]
+            out[i, naux + 4] = work[5, 0]
+            continue
         rhs(ts[i], y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work)
-        for j in range(out.shape[0]):
-            out[j, i] = aux[j]
+        if mode == 1:
+            for j in range(naux):
+                v = aux[j]
+                if v < out[0, j] or math.isnan(v):
+                    out[0, j] = v
+                if v > out[1, j] or math.isnan(v):
+                    out[1, j] = v
+        else:
+            for j in range(naux):
+                out[j, i] = aux[j]
 
 
-@_jit
+def outputs(ts, ys, out, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI):
+    """Evaluate aux at each stored state into ``out`` (its column i the state i's aux, so that
+    each output is a contiguous row): :func:`output_pass`."""
+    output_pass(ts, ys, out, 0, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI)
+
+
 def output_extrema(ts, ys, ext, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI):
     """The least (row 0) and largest (row 1) of each aux column over the stored states,
-    as :func:`outputs` would give them row by row (a NaN stays NaN)."""
-    n = ys.shape[1]
-    dy, y = np.empty(n), np.empty(n)
-    aux = np.empty(ext.shape[1])
-    work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
-    for j in range(ext.shape[1]):
-        ext[0, j] = np.inf
-        ext[1, j] = -np.inf
-    for i in range(ts.shape[0]):
-        for j in range(n):      # as in outputs
-            y[j] = ys[i, j]
-        rhs(ts[i], y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work)
-        for j in range(ext.shape[1]):
-            v = aux[j]
-            if v < ext[0, j] or math.isnan(v):
-                ext[0, j] = v
-            if v > ext[1, j] or math.isnan(v):
-                ext[1, j] = v
+    as :func:`outputs` would give them row by row (a NaN stays NaN): :func:`output_pass`."""
+    output_pass(ts, ys, ext, 1, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI)
 
 
 @_jit
-def eval_many(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, qs, out):
-    """One function at many coordinates: out[i] = (value, first, second derivative)."""
+def function_samples(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, qs, qd, qdd, out, pos, acc):
+    """One function at many coordinates qs: out[i] = (value, first, second derivative); or,
+    where ``qd`` is not empty (q̇ and ``qdd`` q̈ at the samples: a point's coordinate), its
+    value f(q) into pos[i] and its acceleration f''(q) q̇² + f'(q) q̈ into acc[i].  One
+    kernel for :func:`eval_many` and :func:`point_samples` (each compiled kernel costs its
+    own compile)."""
+    point = qd.shape[0] > 0
     for i in range(qs.shape[0]):
         v, d1, d2, bad = feval(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, qs[i])
-        out[i, 0] = v
-        out[i, 1] = d1
-        out[i, 2] = d2
+        if point:
+            pos[i] = v
+            acc[i] = d2 * qd[i] * qd[i] + d1 * qdd[i]
+        else:
+            out[i, 0] = v
+            out[i, 1] = d1
+            out[i, 2] = d2
 
 
-@_jit
+_NONE, _NONE2 = np.empty(0), np.empty((0, 3))      # the arguments function_samples ignores
+
+
+def eval_many(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, qs, out):
+    """One function at many coordinates: out[i] = (value, first, second derivative)
+    (:func:`function_samples`)."""
+    function_samples(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, qs, _NONE, _NONE, out, _NONE,
+                     _NONE)
+
+
 def point_samples(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, qs, qd, qdd, pos, acc):
     """One coordinate of a point at many samples of its part's motion (q, q̇, q̈): its value
-    f(q) into pos[i] and its acceleration f''(q) q̇² + f'(q) q̈ into acc[i]."""
-    for i in range(qs.shape[0]):
-        v, d1, d2, bad = feval(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, qs[i])
-        pos[i] = v
-        acc[i] = d2 * qd[i] * qd[i] + d1 * qdd[i]
+    f(q) into pos[i] and its acceleration f''(q) q̇² + f'(q) q̈ into acc[i]
+    (:func:`function_samples`)."""
+    function_samples(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, qs, qd, qdd, _NONE2, pos, acc)
 
 
 @functools.cache
@@ -881,23 +928,8 @@ def shaft_rhs(t, Y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dY, a
     return acc
 
 
-@_jit
 def shaft_eval(ys, out, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, naux):
     """The shaft's equations (:func:`shaft_rhs` in time, PV[8] = 2) at the states ys[i] =
-    [θ, q, θ̇, q̇]: out[i] = [aux (naux), θ̈, T_motor(θ̇), m₀, m₀', Q₀]."""
-    n = ys.shape[1]
-    dY = np.empty(n)
-    aux = np.empty(naux)
-    work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
-    zy = np.empty(2 * PRIG.shape[0] - 2)
-    zd = np.empty(zy.shape[0])
-    for i in range(ys.shape[0]):
-        acc = shaft_rhs(0.0, ys[i], PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dY,
-                        aux, work, zy, zd)
-        for j in range(naux):
-            out[i, j] = aux[j]
-        out[i, naux] = acc
-        out[i, naux + 1] = motor_torque(PV, PV[0], 12)
-        out[i, naux + 2] = work[3, 0]
-        out[i, naux + 3] = work[4, 0]
-        out[i, naux + 4] = work[5, 0]
+    [θ, q, θ̇, q̇]: out[i] = [aux (naux), θ̈, T_motor(θ̇), m₀, m₀', Q₀] (:func:`output_pass`;
+    ``out`` naux + 5 wide)."""
+    output_pass(_NONE, ys, out, 2, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI)

@@ -203,7 +203,7 @@ def kernels_for(method, *, long=False):
     """
     from . import _motion_kernels as k
 
-    kernels = (k.rk_run, k.outputs, k.output_extrema, k.eval_many, k.point_samples,
+    kernels = (k.rk_run, k.output_pass, k.function_samples,
                *((k.rhs,) if method in SCIPY_METHODS else ()))
     if method != "rk4-python" and k.HAVE_NUMBA:
         if long and _jit.COMPILED is not False:
@@ -274,11 +274,19 @@ def linear_matrices(model: MotionModel, theta: float):
     # prescribed part do not enter; loads are linear anyway
     K, D = (G.T @ (args[7][:, j, None] * G) for j in (0, 1))
     a = model.arrays
+
+    def value(f, q):
+        """(value, first, second derivative) of function f at q: the kernels' ``eval_many``
+        (compiled with the run; ``feval`` from Python would compile it apart)."""
+        out = np.empty((1, 3))
+        kern.eval_many(*function_args(a, f), np.array([q], float), out)
+        return [float(v) for v in out[0]]
+
     m = np.zeros(n + 1)
     for f, w in zip(a["MI"], a["MW"]):
         p = a["FI"][f, 1]
-        q = y0[p - 1] if p > 0 else kern.feval(*function_args(a, a["PRIG"][0]), theta)[0]
-        m[p] += w * kern.feval(*function_args(a, f), q)[1] ** 2
+        q = y0[p - 1] if p > 0 else value(a["PRIG"][0], theta)[0]
+        m[p] += w * value(f, q)[1] ** 2
     return np.diag(m[1:]), D, K
 
 
