@@ -493,31 +493,24 @@ def rk_step(t, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, E
         ynew[m] = tmp[m]
 
 
-@_leaf
-def locate(t, hh, y, k1, ynew, k4, tmp, dy, sw0, sw1, reg, regn, PV, FI, FF, tabs, MI_, MW,
-           EI, EF, MOI, MOF, PRIG, BI, aux, work, off, m, zy, zd, probe):
-    """Earliest fraction s ∈ (0, 1] of the step at which a force law changes piece
-    (reg → regn: an element crosses an edge of its clearance gap, a moment's window opens
-    or closes), on the step's Hermite interpolant (:func:`mechcirc._ode.hermite_point`,
-    quintic in the positions for m > 0; Illinois method, to 1e-9 of the step); the upper
-    end of the bracket, so the change has happened; 1 for a switch exactly on its edge at
-    the step's end, or (``probe`` > 0) one not yet changed at the fraction 1 − ``probe``
-    (tried first: the caller needs no closer location).  ``sw0``/``sw1``: the switches'
-    values at the ends.  Returns (s, right-hand-side evaluations)."""
-    n = y.shape[0]
-    ne = EI.shape[0]
-    nsw = reg.shape[0]
-    xo = off + ne + 2 + MOI.shape[0]
-    best, count = 1.0, 0
+@_jit_inline
+def locate(t, hh, y, K, ynew, tmp, sw0, sw1, reg, regn, PV, FI, FF, tabs, MI_, MW, EI, EF,
+           MOI, MOF, PRIG, BI, aux, work, off, m, zy, zd, probe):
+    """Earliest fraction s ∈ (0, 1] of the step at which a force law changes piece (reg →
+    regn: a clearance gap's edge or a moment's window crossed), on the step's Hermite
+    interpolant (:func:`mechcirc._ode.hermite_point`, quintic in q for m > 0; Illinois, to
+    1e-9 of the step): the bracket's upper end; 1 for a switch on its edge at the step's end,
+    or (``probe`` > 0) one not yet changed at 1 − ``probe`` (tried first).  ``sw0``/``sw1``:
+    the switches at the ends; K the step's stages (K[1] overwritten).  Returns (s, evaluations).
+    Inlined at its one site in :func:`cut_at_kink` (≤ 30 arguments: numba inlines no *args)."""
+    n, ne, nsw, k1, k4, dy = y.shape[0], EI.shape[0], reg.shape[0], K[0], K[K.shape[0] - 1], K[1]
+    xo, best, count = off + ne + 2 + MOI.shape[0], 1.0, 0
     for e in range(nsw):
         if reg[e] == regn[e]:
             continue
-        lo, hi, v, vd, s = 0.0, 1.0, 0.0, 0.0, 0.0
-        r0, r1 = reg[e], regn[e]
-        glo = ghi = g0 = g1 = 0.0
-        side = 0
-        # it = -2, -1: the gaps at the step's ends (sw0, sw1), through the loop's one
-        # edge_gap site (numba's inlining copies it, with its whole scope, at every site)
+        lo, hi, v, vd, s, side = 0.0, 1.0, 0.0, 0.0, 0.0, 0
+        r0, r1, glo, ghi, g0, g1 = reg[e], regn[e], 0.0, 0.0, 0.0, 0.0
+        # it = -2, -1: the step's ends (sw0, sw1), at the one edge_gap site (inlined per site)
         for it in range(-2, 60):
             probing = False
             if it < 0:
@@ -543,24 +536,17 @@ def locate(t, hh, y, k1, ynew, k4, tmp, dy, sw0, sw1, reg, regn, PV, FI, FF, tab
                 else:
                     v = work[6, MOI[e - ne, 0]] - MOF[e - ne, 3] + 0.5 * MOF[e - ne, 1]
             g = edge_gap(e, ne, r0, r1, v, vd, EF, MOF)
-            if it == -2:
-                glo = g
-                continue
-            if it == -1:
-                ghi = g
-                if ghi == 0.0:  # on the edge at the step's end: the change is there, no cut
-                    break       # (hi stays 1: best unchanged)
+            if it < 0:
+                glo, ghi = (g, ghi) if it == -2 else (glo, g)
                 g0, g1 = glo, ghi
+                if it == -1 and ghi == 0.0:     # on the edge at the step's end: the change
+                    break                       # is there, no cut (hi 1: best unchanged)
                 continue
             if (g > 0.0) == (ghi > 0.0) and g != 0.0:
-                hi, ghi = s, g
-                if side == 1:
-                    glo *= 0.5
+                hi, ghi, glo = s, g, glo * 0.5 if side == 1 else glo
                 side = 1
             else:
-                lo, glo = s, g
-                if side == -1:
-                    ghi *= 0.5
+                lo, glo, ghi = s, g, ghi * 0.5 if side == -1 else ghi
                 side = -1
                 if probing:     # not changed by 1 − probe: close enough
                     hi = 1.0
@@ -616,27 +602,27 @@ def cut_at_kink(tc, hh, h, y, K, tmp, ynew, sw0, sw1, reg, regn, TA, TB, TC, PV,
     used).
     """
     s = TB.shape[0]
-    cut, used = locate(tc, hh, y, K[0], ynew, K[s], tmp, K[1], sw0, sw1, reg, regn, PV, FI, FF,
-                       tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, auxl, work, off, m, zy, zd,
-                       0.0)
-    cut = cut + 1e-7
-    if not (cut * hh > 1e-9 * h and cut < 1.0 - 1e-7):
-        return hh, True, used
-    for _ in range(4):
-        hh = cut * hh
-        rk_step(tc, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI,
-                MOF, PRIG, BI, aux, work, zy, zd)
-        used += s          # s - 1 stages and f at the end (rk_step)
-        regions(FI, EI, EF, MOI, MOF, aux, work, off, regn, sw1, first)
-        if not branch_changes(reg, regn):   # cut before the kink: the next piece finds it
-            break
-        # only whether the kink is within the break's tolerance of the end: tried first
-        more, extra = locate(tc, hh, y, K[0], ynew, K[s], tmp, K[1], sw0, sw1, reg, regn, PV,
-                             FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, auxl, work, off,
-                             m, zy, zd, 0.99e-7 * (1.0 + h / hh))
+    used, cut, probe = 0, 1.0, 0.0
+    # k = 0 the first location, then at most 4 cut steps; locate's one site (it is inlined)
+    for k in range(5):
+        if k > 0:
+            hh = cut * hh
+            rk_step(tc, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI,
+                    MOF, PRIG, BI, aux, work, zy, zd)
+            used += s          # s - 1 stages and f at the end (rk_step)
+            regions(FI, EI, EF, MOI, MOF, aux, work, off, regn, sw1, first)
+            if not branch_changes(reg, regn):   # cut before the kink: the next piece finds it
+                break
+            # only whether the kink is within the break's tolerance of the end: tried first
+            probe = 0.99e-7 * (1.0 + h / hh)
+        more, extra = locate(tc, hh, y, K, ynew, tmp, sw0, sw1, reg, regn, PV, FI, FF, tabs,
+                             MI_, MW, EI, EF, MOI, MOF, PRIG, BI, auxl, work, off, m, zy, zd,
+                             probe)
         used += extra
         cut = more + 1e-7
-        if not ((1.0 - cut) * hh > 1e-7 * h and cut * hh > 1e-9 * h):
+        if k == 0 and not (cut * hh > 1e-9 * h and cut < 1.0 - 1e-7):
+            return hh, True, used
+        if k > 0 and not ((1.0 - cut) * hh > 1e-7 * h and cut * hh > 1e-9 * h):
             break       # as close as the first cut's own tolerance
     return hh, False, used
 
@@ -786,39 +772,26 @@ def output_extrema(ts, ys, ext, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRI
 
 
 @_jit
-def function_samples(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, qs, qd, qdd, out, pos, acc):
-    """One function at many coordinates qs: out[i] = (value, first, second derivative); or,
-    where ``qd`` is not empty (q̇ and ``qdd`` q̈ at the samples: a point's coordinate), its
-    value f(q) into pos[i] and its acceleration f''(q) q̇² + f'(q) q̈ into acc[i].  One
-    kernel for :func:`eval_many` and :func:`point_samples` (each compiled kernel costs its
-    own compile)."""
-    point = qd.shape[0] > 0
+def eval_many(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, qs, out):
+    """One function at many coordinates: out[i] = (value, first, second derivative)."""
     for i in range(qs.shape[0]):
         v, d1, d2, bad = feval(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, qs[i])
-        if point:
-            pos[i] = v
-            acc[i] = d2 * qd[i] * qd[i] + d1 * qdd[i]
-        else:
-            out[i, 0] = v
-            out[i, 1] = d1
-            out[i, 2] = d2
+        out[i, 0] = v
+        out[i, 1] = d1
+        out[i, 2] = d2
 
 
-_NONE, _NONE2 = np.empty(0), np.empty((0, 3))      # the arguments function_samples ignores
-
-
-def eval_many(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, qs, out):
-    """One function at many coordinates: out[i] = (value, first, second derivative)
-    (:func:`function_samples`)."""
-    function_samples(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, qs, _NONE, _NONE, out, _NONE,
-                     _NONE)
-
-
+@_jit
 def point_samples(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, qs, qd, qdd, pos, acc):
     """One coordinate of a point at many samples of its part's motion (q, q̇, q̈): its value
-    f(q) into pos[i] and its acceleration f''(q) q̇² + f'(q) q̈ into acc[i]
-    (:func:`function_samples`)."""
-    function_samples(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, qs, qd, qdd, _NONE2, pos, acc)
+    f(q) into pos[i] and its acceleration f''(q) q̇² + f'(q) q̈ into acc[i]."""
+    for i in range(qs.shape[0]):
+        v, d1, d2, bad = feval(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, qs[i])
+        pos[i] = v
+        acc[i] = d2 * qd[i] * qd[i] + d1 * qdd[i]
+
+
+_NONE = np.empty(0)      # the times shaft_eval does not pass to output_pass
 
 
 @functools.cache

@@ -203,7 +203,7 @@ def kernels_for(method, *, long=False):
     """
     from . import _motion_kernels as k
 
-    kernels = (k.rk_run, k.output_pass, k.function_samples,
+    kernels = (k.rk_run, k.output_pass, k.eval_many, k.point_samples,
                *((k.rhs,) if method in SCIPY_METHODS else ()))
     if method != "rk4-python" and k.HAVE_NUMBA:
         if long and _jit.COMPILED is not False:
