@@ -250,6 +250,8 @@ def linear_matrices(model: MotionModel, theta: float):
     -------
     tuple of 3 ndarray
     """
+    from . import _motion_kernels
+
     kern = kernels_for("rk4")[0]           # compiled when numba is importable
     n = model.n_free
     y0 = model.rigid_state(theta)
@@ -274,19 +276,14 @@ def linear_matrices(model: MotionModel, theta: float):
     # prescribed part do not enter; loads are linear anyway
     K, D = (G.T @ (args[7][:, j, None] * G) for j in (0, 1))
     a = model.arrays
-
-    def value(f, q):
-        """(value, first, second derivative) of function f at q: the kernels' ``eval_many``
-        (compiled with the run; ``feval`` from Python would compile it apart)."""
-        out = np.empty((1, 3))
-        kern.eval_many(*function_args(a, f), np.array([q], float), out)
-        return [float(v) for v in out[0]]
-
+    # the Python copy's feval, as MotionModel.rigid_state: the compiled one, called from
+    # Python, would be compiled apart for these few values (0.24 s of a cold start)
+    value = _motion_kernels.load_python().feval
     m = np.zeros(n + 1)
     for f, w in zip(a["MI"], a["MW"]):
         p = a["FI"][f, 1]
-        q = y0[p - 1] if p > 0 else value(a["PRIG"][0], theta)[0]
-        m[p] += w * value(f, q)[1] ** 2
+        q = y0[p - 1] if p > 0 else value(*function_args(a, a["PRIG"][0]), theta)[0]
+        m[p] += w * value(*function_args(a, f), q)[1] ** 2
     return np.diag(m[1:]), D, K
 
 
