@@ -50,7 +50,7 @@ def main(argv=None) -> int:
     from mechcirc.scene import _motion_kernels as k
     # Where the cache holds the kernels, their callees first, as a user's run loads them
     # (mechcirc._jit.in_cache; a first run in a fresh cache compiles them here).
-    jit.in_cache(k.rk_run, k.outputs, k.output_extrema, k.eval_many, k.point_samples)
+    jit.in_cache(k.rk_run, k.output_pass, k.eval_many, k.point_samples)
     jit.COMPILED = True
     simulate("one-side", 3, 5)                          # compile / cache load
     simulate("one-side", 3, 1, method="DOP853", rtol=1e-3, error_estimate=False)

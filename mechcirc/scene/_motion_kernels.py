@@ -493,61 +493,60 @@ def rk_step(t, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, E
         ynew[m] = tmp[m]
 
 
-@_leaf
-def locate(t, hh, y, k1, ynew, k4, tmp, dy, sw0, sw1, reg, regn, PV, FI, FF, tabs, MI_, MW,
-           EI, EF, MOI, MOF, PRIG, BI, aux, work, off, m, zy, zd, probe):
-    """Earliest fraction s ∈ (0, 1] of the step at which a force law changes piece
-    (reg → regn: an element crosses an edge of its clearance gap, a moment's window opens
-    or closes), on the step's Hermite interpolant (:func:`mechcirc._ode.hermite_point`,
-    quintic in the positions for m > 0; Illinois method, to 1e-9 of the step); the upper
-    end of the bracket, so the change has happened; 1 for a switch exactly on its edge at
-    the step's end, or (``probe`` > 0) one not yet changed at the fraction 1 − ``probe``
-    (tried first: the caller needs no closer location).  ``sw0``/``sw1``: the switches'
-    values at the ends.  Returns (s, right-hand-side evaluations)."""
-    n = y.shape[0]
-    ne = EI.shape[0]
-    nsw = reg.shape[0]
-    xo = off + ne + 2 + MOI.shape[0]
-    best, count = 1.0, 0
+@_jit_inline
+def locate(t, hh, y, K, ynew, tmp, sw0, sw1, reg, regn, PV, FI, FF, tabs, MI_, MW, EI, EF,
+           MOI, MOF, PRIG, BI, aux, work, off, m, zy, zd, probe):
+    """Earliest fraction s ∈ (0, 1] of the step at which a force law changes piece (reg →
+    regn: a clearance gap's edge or a moment's window crossed), on the step's Hermite
+    interpolant (:func:`mechcirc._ode.hermite_point`, quintic in q for m > 0; Illinois, to
+    1e-9 of the step): the bracket's upper end; 1 for a switch on its edge at the step's end,
+    or (``probe`` > 0) one not yet changed at 1 − ``probe`` (tried first).  ``sw0``/``sw1``:
+    the switches at the ends; K the step's stages (K[1] overwritten).  Returns (s, evaluations).
+    Inlined at its one site in :func:`cut_at_kink` (≤ 30 arguments: numba inlines no *args)."""
+    n, ne, nsw, k1, k4, dy = y.shape[0], EI.shape[0], reg.shape[0], K[0], K[K.shape[0] - 1], K[1]
+    xo, best, count = off + ne + 2 + MOI.shape[0], 1.0, 0
     for e in range(nsw):
         if reg[e] == regn[e]:
             continue
-        lo, hi, vd = 0.0, 1.0, 0.0
-        r0, r1 = reg[e], regn[e]
-        glo = edge_gap(e, ne, r0, r1, sw0[e], sw0[nsw + e] if e < ne else 0.0, EF, MOF)
-        ghi = edge_gap(e, ne, r0, r1, sw1[e], sw1[nsw + e] if e < ne else 0.0, EF, MOF)
-        if ghi == 0.0:      # on the edge at the step's end: the change is there, no cut
-            continue
-        g0, g1, side = glo, ghi, 0
-        for it in range(60):
-            if hi - lo <= 1e-9 or hi <= 0.0:
-                break
-            s = hi - ghi * (hi - lo) / (ghi - glo) if ghi != glo else 0.5 * (lo + hi)
-            probing = it == 0 and 0.0 < probe < 1.0
-            if probing:
-                s = 1.0 - probe
-            elif it == (probe > 0.0) and e < ne and r0 * r1 <= 0:
-                s = gap_root(g0, g1, hh * sw0[nsw + e], hh * sw1[nsw + e], s)
-            if not lo < s < hi:
-                s = 0.5 * (lo + hi)
-            hermite_point(tmp, s, hh, y, k1, ynew, k4, n, m)
-            deriv(t + s * hh, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy,
-                  aux, work, zy, zd)
-            count += 1
-            if e < ne:
-                v, vd = aux[off + e], aux[xo + e]
+        lo, hi, v, vd, s, side = 0.0, 1.0, 0.0, 0.0, 0.0, 0
+        r0, r1, glo, ghi, g0, g1 = reg[e], regn[e], 0.0, 0.0, 0.0, 0.0
+        # it = -2, -1: the step's ends (sw0, sw1), at the one edge_gap site (inlined per site)
+        for it in range(-2, 60):
+            probing = False
+            if it < 0:
+                sw = sw0 if it == -2 else sw1
+                v, vd = sw[e], sw[nsw + e] if e < ne else 0.0
             else:
-                v = work[6, MOI[e - ne, 0]] - MOF[e - ne, 3] + 0.5 * MOF[e - ne, 1]
+                if hi - lo <= 1e-9 or hi <= 0.0:
+                    break
+                s = hi - ghi * (hi - lo) / (ghi - glo) if ghi != glo else 0.5 * (lo + hi)
+                probing = it == 0 and 0.0 < probe < 1.0
+                if probing:
+                    s = 1.0 - probe
+                elif it == (probe > 0.0) and e < ne and r0 * r1 <= 0:
+                    s = gap_root(g0, g1, hh * sw0[nsw + e], hh * sw1[nsw + e], s)
+                if not lo < s < hi:
+                    s = 0.5 * (lo + hi)
+                hermite_point(tmp, s, hh, y, k1, ynew, k4, n, m)
+                deriv(t + s * hh, tmp, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI,
+                      dy, aux, work, zy, zd)
+                count += 1
+                if e < ne:
+                    v, vd = aux[off + e], aux[xo + e]
+                else:
+                    v = work[6, MOI[e - ne, 0]] - MOF[e - ne, 3] + 0.5 * MOF[e - ne, 1]
             g = edge_gap(e, ne, r0, r1, v, vd, EF, MOF)
+            if it < 0:
+                glo, ghi = (g, ghi) if it == -2 else (glo, g)
+                g0, g1 = glo, ghi
+                if it == -1 and ghi == 0.0:     # on the edge at the step's end: the change
+                    break                       # is there, no cut (hi 1: best unchanged)
+                continue
             if (g > 0.0) == (ghi > 0.0) and g != 0.0:
-                hi, ghi = s, g
-                if side == 1:
-                    glo *= 0.5
+                hi, ghi, glo = s, g, glo * 0.5 if side == 1 else glo
                 side = 1
             else:
-                lo, glo = s, g
-                if side == -1:
-                    ghi *= 0.5
+                lo, glo, ghi = s, g, ghi * 0.5 if side == -1 else ghi
                 side = -1
                 if probing:     # not changed by 1 − probe: close enough
                     hi = 1.0
@@ -603,27 +602,27 @@ def cut_at_kink(tc, hh, h, y, K, tmp, ynew, sw0, sw1, reg, regn, TA, TB, TC, PV,
     used).
     """
     s = TB.shape[0]
-    cut, used = locate(tc, hh, y, K[0], ynew, K[s], tmp, K[1], sw0, sw1, reg, regn, PV, FI, FF,
-                       tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, auxl, work, off, m, zy, zd,
-                       0.0)
-    cut = cut + 1e-7
-    if not (cut * hh > 1e-9 * h and cut < 1.0 - 1e-7):
-        return hh, True, used
-    for _ in range(4):
-        hh = cut * hh
-        rk_step(tc, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI,
-                MOF, PRIG, BI, aux, work, zy, zd)
-        used += s          # s - 1 stages and f at the end (rk_step)
-        regions(FI, EI, EF, MOI, MOF, aux, work, off, regn, sw1, first)
-        if not branch_changes(reg, regn):   # cut before the kink: the next piece finds it
-            break
-        # only whether the kink is within the break's tolerance of the end: tried first
-        more, extra = locate(tc, hh, y, K[0], ynew, K[s], tmp, K[1], sw0, sw1, reg, regn, PV,
-                             FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, auxl, work, off,
-                             m, zy, zd, 0.99e-7 * (1.0 + h / hh))
+    used, cut, probe = 0, 1.0, 0.0
+    # k = 0 the first location, then at most 4 cut steps; locate's one site (it is inlined)
+    for k in range(5):
+        if k > 0:
+            hh = cut * hh
+            rk_step(tc, hh, y, K, tmp, ynew, TA, TB, TC, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI,
+                    MOF, PRIG, BI, aux, work, zy, zd)
+            used += s          # s - 1 stages and f at the end (rk_step)
+            regions(FI, EI, EF, MOI, MOF, aux, work, off, regn, sw1, first)
+            if not branch_changes(reg, regn):   # cut before the kink: the next piece finds it
+                break
+            # only whether the kink is within the break's tolerance of the end: tried first
+            probe = 0.99e-7 * (1.0 + h / hh)
+        more, extra = locate(tc, hh, y, K, ynew, tmp, sw0, sw1, reg, regn, PV, FI, FF, tabs,
+                             MI_, MW, EI, EF, MOI, MOF, PRIG, BI, auxl, work, off, m, zy, zd,
+                             probe)
         used += extra
         cut = more + 1e-7
-        if not ((1.0 - cut) * hh > 1e-7 * h and cut * hh > 1e-9 * h):
+        if k == 0 and not (cut * hh > 1e-9 * h and cut < 1.0 - 1e-7):
+            return hh, True, used
+        if k > 0 and not ((1.0 - cut) * hh > 1e-7 * h and cut * hh > 1e-9 * h):
             break       # as close as the first cut's own tolerance
     return hh, False, used
 
@@ -716,42 +715,60 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
 
 
 @_jit
-def outputs(ts, ys, out, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI):
-    """Evaluate aux at each stored state into ``out`` (its column i the state i's aux, so that
-    each output is a contiguous row)."""
+def output_pass(ts, ys, out, mode, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI):
+    """The equations at each stored state ys[i]: one kernel for :func:`outputs` (``mode`` 0:
+    aux into ``out``, its column i the state i's aux, so that each output is a contiguous
+    row), :func:`output_extrema` (1: the least (row 0) and largest (row 1) of each aux column,
+    as the rows would give them; a NaN stays NaN) and :func:`shaft_eval` (2: the shaft's, ts
+    unused); each compiled kernel emits the equations' code again."""
     n = ys.shape[1]
+    naux = out.shape[0] if mode == 0 else out.shape[1] - (5 if mode == 2 else 0)
     dy, y = np.empty(n), np.empty(n)
-    aux = np.empty(out.shape[0])
+    aux = np.empty(naux)
     work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
-    for i in range(ts.shape[0]):
+    zy = np.empty(2 * PRIG.shape[0] - 2)
+    zd = np.empty(zy.shape[0])
+    if mode == 1:
+        for j in range(naux):
+            out[0, j] = np.inf
+            out[1, j] = -np.inf
+    for i in range(ys.shape[0]):
         for j in range(n):      # a copy, not the view ys[i] (two atomic reference counts)
             y[j] = ys[i, j]
+        if mode == 2:
+            acc = shaft_rhs(0.0, y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy,
+                            aux, work, zy, zd)
+            for j in range(naux):
+                out[i, j] = aux[j]
+            out[i, naux] = acc
+            out[i, naux + 1] = motor_torque(PV, PV[0], 12)
+            out[i, naux + 2] = work[3, 0]
+            out[i, naux + 3] = work[4, 0]
+            out[i, naux + 4] = work[5, 0]
+            continue
         rhs(ts[i], y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work)
-        for j in range(out.shape[0]):
-            out[j, i] = aux[j]
+        if mode == 1:
+            for j in range(naux):
+                v = aux[j]
+                if v < out[0, j] or math.isnan(v):
+                    out[0, j] = v
+                if v > out[1, j] or math.isnan(v):
+                    out[1, j] = v
+        else:
+            for j in range(naux):
+                out[j, i] = aux[j]
 
 
-@_jit
+def outputs(ts, ys, out, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI):
+    """Evaluate aux at each stored state into ``out`` (its column i the state i's aux, so that
+    each output is a contiguous row): :func:`output_pass`."""
+    output_pass(ts, ys, out, 0, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI)
+
+
 def output_extrema(ts, ys, ext, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI):
     """The least (row 0) and largest (row 1) of each aux column over the stored states,
-    as :func:`outputs` would give them row by row (a NaN stays NaN)."""
-    n = ys.shape[1]
-    dy, y = np.empty(n), np.empty(n)
-    aux = np.empty(ext.shape[1])
-    work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
-    for j in range(ext.shape[1]):
-        ext[0, j] = np.inf
-        ext[1, j] = -np.inf
-    for i in range(ts.shape[0]):
-        for j in range(n):      # as in outputs
-            y[j] = ys[i, j]
-        rhs(ts[i], y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dy, aux, work)
-        for j in range(ext.shape[1]):
-            v = aux[j]
-            if v < ext[0, j] or math.isnan(v):
-                ext[0, j] = v
-            if v > ext[1, j] or math.isnan(v):
-                ext[1, j] = v
+    as :func:`outputs` would give them row by row (a NaN stays NaN): :func:`output_pass`."""
+    output_pass(ts, ys, ext, 1, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI)
 
 
 @_jit
@@ -772,6 +789,9 @@ def point_samples(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, qs, qd, qdd, pos, a
         v, d1, d2, bad = feval(kind, tabs, ti, a, b, c, lo, h, w, ic, ih, qs[i])
         pos[i] = v
         acc[i] = d2 * qd[i] * qd[i] + d1 * qdd[i]
+
+
+_NONE = np.empty(0)      # the times shaft_eval does not pass to output_pass
 
 
 @functools.cache
@@ -881,23 +901,8 @@ def shaft_rhs(t, Y, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dY, a
     return acc
 
 
-@_jit
 def shaft_eval(ys, out, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, naux):
     """The shaft's equations (:func:`shaft_rhs` in time, PV[8] = 2) at the states ys[i] =
-    [θ, q, θ̇, q̇]: out[i] = [aux (naux), θ̈, T_motor(θ̇), m₀, m₀', Q₀]."""
-    n = ys.shape[1]
-    dY = np.empty(n)
-    aux = np.empty(naux)
-    work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))
-    zy = np.empty(2 * PRIG.shape[0] - 2)
-    zd = np.empty(zy.shape[0])
-    for i in range(ys.shape[0]):
-        acc = shaft_rhs(0.0, ys[i], PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI, dY,
-                        aux, work, zy, zd)
-        for j in range(naux):
-            out[i, j] = aux[j]
-        out[i, naux] = acc
-        out[i, naux + 1] = motor_torque(PV, PV[0], 12)
-        out[i, naux + 2] = work[3, 0]
-        out[i, naux + 3] = work[4, 0]
-        out[i, naux + 4] = work[5, 0]
+    [θ, q, θ̇, q̇]: out[i] = [aux (naux), θ̈, T_motor(θ̇), m₀, m₀', Q₀] (:func:`output_pass`;
+    ``out`` naux + 5 wide)."""
+    output_pass(_NONE, ys, out, 2, PV, FI, FF, tabs, MI_, MW, EI, EF, MOI, MOF, PRIG, BI)

@@ -388,15 +388,15 @@ _WARM_STATEMENT = ("import mechcirc._jit as j; j.COMPILED = True; "
 
 
 def _shaft_kernels():
-    """The kernel module whose ``rk_run``, ``shaft_eval`` and ``shaft_rhs`` the shaft calls:
-    compiled when numba's
-    disk cache holds it (or :data:`mechcirc._jit.COMPILED` is True), else the Python copy
-    while a detached process compiles it (the no-wait rule of :mod:`mechcirc._jit`)."""
+    """The kernel module whose ``rk_run``, ``shaft_eval`` (the kernel ``output_pass``) and
+    ``shaft_rhs`` the shaft calls: compiled when numba's disk cache holds it (or
+    :data:`mechcirc._jit.COMPILED` is True), else the Python copy while a detached process
+    compiles it (the no-wait rule of :mod:`mechcirc._jit`)."""
     from .. import _jit
 
     from . import _motion_kernels as k
 
-    return k if k.HAVE_NUMBA and _jit.use(_WARM_STATEMENT, k.rk_run, k.shaft_eval,
+    return k if k.HAVE_NUMBA and _jit.use(_WARM_STATEMENT, k.rk_run, k.output_pass,
                                           k.shaft_rhs) else k.load_python()
 
 

@@ -203,7 +203,7 @@ def kernels_for(method, *, long=False):
     """
     from . import _motion_kernels as k
 
-    kernels = (k.rk_run, k.outputs, k.output_extrema, k.eval_many, k.point_samples,
+    kernels = (k.rk_run, k.output_pass, k.eval_many, k.point_samples,
                *((k.rhs,) if method in SCIPY_METHODS else ()))
     if method != "rk4-python" and k.HAVE_NUMBA:
         if long and _jit.COMPILED is not False:
@@ -250,6 +250,8 @@ def linear_matrices(model: MotionModel, theta: float):
     -------
     tuple of 3 ndarray
     """
+    from . import _motion_kernels
+
     kern = kernels_for("rk4")[0]           # compiled when numba is importable
     n = model.n_free
     y0 = model.rigid_state(theta)
@@ -274,11 +276,14 @@ def linear_matrices(model: MotionModel, theta: float):
     # prescribed part do not enter; loads are linear anyway
     K, D = (G.T @ (args[7][:, j, None] * G) for j in (0, 1))
     a = model.arrays
+    # the Python copy's feval, as MotionModel.rigid_state: the compiled one, called from
+    # Python, would be compiled apart for these few values (0.24 s of a cold start)
+    value = _motion_kernels.load_python().feval
     m = np.zeros(n + 1)
     for f, w in zip(a["MI"], a["MW"]):
         p = a["FI"][f, 1]
-        q = y0[p - 1] if p > 0 else kern.feval(*function_args(a, a["PRIG"][0]), theta)[0]
-        m[p] += w * kern.feval(*function_args(a, f), q)[1] ** 2
+        q = y0[p - 1] if p > 0 else value(*function_args(a, a["PRIG"][0]), theta)[0]
+        m[p] += w * value(*function_args(a, f), q)[1] ** 2
     return np.diag(m[1:]), D, K
 
 
