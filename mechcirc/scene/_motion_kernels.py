@@ -505,8 +505,7 @@ def locate(t, hh, y, K, ynew, tmp, sw0, sw1, reg, regn, PV, FI, FF, tabs, MI_, M
     Inlined at its one site in :func:`cut_at_kink` (≤ 30 arguments: numba inlines no *args)."""
     n, ne, nsw = y.shape[0], EI.shape[0], reg.shape[0]
     k1, k4, dy = K[0], K[K.shape[0] - 1], K[1]
-    xo = off + ne + 2 + MOI.shape[0]
-    best, count = 1.0, 0
+    xo, best, count = off + ne + 2 + MOI.shape[0], 1.0, 0
     for e in range(nsw):
         if reg[e] == regn[e]:
             continue
@@ -517,8 +516,7 @@ def locate(t, hh, y, K, ynew, tmp, sw0, sw1, reg, regn, PV, FI, FF, tabs, MI_, M
             probing = False
             if it < 0:
                 sw = sw0 if it == -2 else sw1
-                v = sw[e]
-                vd = sw[nsw + e] if e < ne else 0.0
+                v, vd = sw[e], (sw[nsw + e] if e < ne else 0.0)
             else:
                 if hi - lo <= 1e-9 or hi <= 0.0:
                     break
@@ -540,24 +538,17 @@ def locate(t, hh, y, K, ynew, tmp, sw0, sw1, reg, regn, PV, FI, FF, tabs, MI_, M
                     v = work[6, MOI[e - ne, 0]] - MOF[e - ne, 3] + 0.5 * MOF[e - ne, 1]
             g = edge_gap(e, ne, r0, r1, v, vd, EF, MOF)
             if it < 0:
-                if it == -2:
-                    glo = g
-                else:
-                    ghi = g
+                glo, ghi = (g, ghi) if it == -2 else (glo, g)
                 g0, g1 = glo, ghi
                 if it == -1 and ghi == 0.0:     # on the edge at the step's end: the change
                     break                       # is there, no cut (hi 1: best unchanged)
                 continue
             if (g > 0.0) == (ghi > 0.0) and g != 0.0:
-                hi, ghi = s, g
-                if side == 1:
-                    glo *= 0.5
-                side = 1
+                glo = 0.5 * glo if side == 1 else glo      # Illinois: halve the stale end
+                hi, ghi, side = s, g, 1
             else:
-                lo, glo = s, g
-                if side == -1:
-                    ghi *= 0.5
-                side = -1
+                ghi = 0.5 * ghi if side == -1 else ghi
+                lo, glo, side = s, g, -1
                 if probing:     # not changed by 1 − probe: close enough
                     hi = 1.0
                     break
