@@ -7,6 +7,7 @@
 * Eq. (4) of Mrázek written out again from the paper with its own clearance law.
 """
 
+import functools
 import math
 
 import numpy as np
@@ -64,7 +65,10 @@ def front_dead_centre(a=A, b=B, c=C, d=D):
     raise AssertionError("no front dead centre")
 
 
+@functools.lru_cache(maxsize=None)
 def first_nu_zero():
+    """The crank angle of the first zero of ν (a constant: 3,800 closed-form solves, computed
+    once per process rather than by each caller)."""
     th = np.linspace(0, 2 * math.pi, 3601)
     nu = np.array([rocker(t)[2] for t in th])
     i = int(np.flatnonzero(np.sign(nu[:-1]) != np.sign(nu[1:]))[0])

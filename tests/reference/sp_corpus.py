@@ -177,6 +177,10 @@ def _critical_points(expr, lo: float, hi: float, n_grid: int) -> list:
             a, b = mpmath.mpf(w1), mpmath.mpf(w2)
             xa = x1
             for _ in range(110):        # 2^-110 of the bracket: beyond float64
+                if float(a) == float(b):
+                    # Every point of [a, b] rounds to this float (rounding is monotone),
+                    # the further halvings' midpoint too: the answer is known.
+                    break
                 mid = (a + b) / 2
                 try:
                     xm = mpmath.im(K_mp(expr, mid))
