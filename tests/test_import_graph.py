@@ -85,7 +85,8 @@ def _imports(path: Path, modules: set[str]):
                     sub = f"{target}.{alias.name}"
                     found.append((sub if sub in modules else target, lazy, delegate))
         for child in ast.iter_child_nodes(node):
-            visit(child, lazy, delegate or _is_delegate(child, node))
+            if not isinstance(child, ast.expr):     # no statement (no import) inside one
+                visit(child, lazy, delegate or _is_delegate(child, node))
 
     visit(tree, False)
     return found
