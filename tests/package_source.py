@@ -19,3 +19,14 @@ def package_trees() -> dict[Path, ast.Module]:
     """``{path: tree}`` of every ``.py`` file of the package, in sorted path order."""
     return {path: ast.parse(path.read_text(encoding="utf-8"))
             for path in sorted(PACKAGE.rglob("*.py"))}
+
+
+def statements(tree: ast.AST):
+    """Every node of ``tree`` but expressions and what is inside them (as ``ast.walk``
+    would give them, less those): an expression holds no statement, so a walk for
+    classes, functions or imports need not enter one (most of a module's nodes)."""
+    todo = [tree]
+    while todo:
+        node = todo.pop()
+        yield node
+        todo.extend(c for c in ast.iter_child_nodes(node) if not isinstance(c, ast.expr))

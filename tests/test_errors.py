@@ -4,7 +4,7 @@ import ast
 import inspect
 from pathlib import Path
 
-from package_source import package_trees
+from package_source import package_trees, statements
 
 import mechcirc
 from mechcirc import errors
@@ -33,7 +33,7 @@ def test_no_public_exception_class_outside_errors_py():
     for path, tree in package_trees().items():
         if path.name == "errors.py":
             continue
-        for node in ast.walk(tree):
+        for node in statements(tree):
             if isinstance(node, ast.ClassDef) and not node.name.startswith("_"):
                 bases = [ast.unparse(b).rpartition(".")[2] for b in node.bases]
                 if any(b.endswith(("Error", "Warning", "Exception")) and b != "BaseException"

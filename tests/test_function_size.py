@@ -6,7 +6,7 @@ counted, the docstring counted), for every function and method, nested ones incl
 
 import ast
 
-from package_source import PACKAGE, package_trees
+from package_source import PACKAGE, package_trees, statements
 
 MAX_LINES = 100
 LONG = 60
@@ -16,7 +16,7 @@ MAX_LONG = 10
 def function_lengths(tree: ast.Module) -> list[tuple[int, str, int]]:
     """(length, name, first line) of every function in ``tree``."""
     return [(node.end_lineno - node.lineno + 1, node.name, node.lineno)
-            for node in ast.walk(tree)
+            for node in statements(tree)
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef))]
 
 
