@@ -657,7 +657,7 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
         Unbounded (``value = inf``, ``omega`` = the resonance) when the band
         holds an undamped zero of K (for Q0 and S) or pole of K (for v0 and K),
         found exactly by :meth:`Circuit.resonances`; otherwise the maximum
-        located by a bounded Brent search around the grid's largest value and
+        located by a golden-section search around the grid's largest value and
         around every damped resonance of the right kind in the band.  Above
         :data:`PEAK_RESONANCE_LIMIT` elements the resonances are not computed
         (grid search only).
@@ -686,7 +686,7 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
 
 def _located_peak(circuit, grid, lo: float, hi: float, quantity: str, method: Method,
                   xtol: float, resonances) -> Peak:
-    """:func:`peak` once its arguments are checked: the exact roots, the grid, Brent searches."""
+    """:func:`peak` once its arguments are checked: the exact roots, the grid, the bracket searches."""
     refine = True if grid is None else grid.refine     # solve as the sweep did
     found = _peak_roots(circuit, lo, hi, quantity, resonances)
     undamped = tuple(r.omega for r in found if r.zeta <= UNDAMPED_ZETA)
