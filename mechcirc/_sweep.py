@@ -645,7 +645,7 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
     xtol : float
         Relative tolerance in ω of the golden-section search (also to 1e-9 of
         each bracket, :func:`golden_max`).  |q| is flat at its maximum, so the
-        value is right to about machine precision (1.4e-16 from a 40-digit
+        value is right to about machine precision (3.6e-16 from a 40-digit
         search, ζ down to 7e-6) while ω is located to about √eps ≈ 1e-8 of the
         bracket (the rounding of |q| hides it).
     method : {"auto", "sp", "nodal"}
