@@ -176,8 +176,8 @@ def test_damped_designs_extremes_are_searched_at_once_as_peak_searches():
 
     for d in range(2):
         c = one(DAMPED, params, d)
-        # The same maximum to rounding (golden section against peak's Brent search,
-        # measured ≤ 1.2e-15); ω on its flat top to ≤ 3e-10 (measured).
+        # The same maximum to rounding (the one golden search, on the plan at per-design
+        # points and on peak's sweeps: measured ≤ 1.2e-15); ω on its flat top to ≤ 3e-10.
         for got, want in ((ex.Q0_max[d], peak(c, 10, 1e3, quantity="Q0")),
                           (ex.K_max[d], peak(c, 10, 1e3, quantity="K")),
                           (1 / ex.K_min[d], peak(c, 10, 1e3, quantity="S"))):
@@ -418,8 +418,8 @@ def test_newton_polish_goes_on_beside_a_root_that_makes_its_matrix_exactly_singu
     s, step, kappa = _newton_det(np.array([[2j], [3.1j]]), np.ones((2, 1), bool), Ms, Ds, Ks)
     assert s[0, 0] == 2j and step[0, 0] == 0
     assert abs(s[1, 0] - 3j) < 1e-6 and step[1, 0] > 0
-    # κ of a simple root of diagonal P: (|s|² + k)/(2|s|²) = 1 at s = 2j (Frobenius
-    # norms: (4√2 + √97)/8 = 1.94); the second at 3j: (9√2 + √97)/18 = 1.254.
+    # κ = (|s|²‖I‖_F + ‖diag(4, 9)‖_F)/(|s|·|2s|) with the null vector a unit vector:
+    # (4√2 + √97)/8 = 1.94 at s = 2j, (9√2 + √97)/18 = 1.254 at 3j.
     assert kappa == pytest.approx([(4 * 2 ** 0.5 + 97 ** 0.5) / 8,
                                    (9 * 2 ** 0.5 + 97 ** 0.5) / 18], rel=1e-6)
 
