@@ -408,22 +408,12 @@ def constraint_basis(G: np.ndarray, n: int, dense: bool = False):
         import scipy.sparse as sp
 
         return sp.identity(n, format="csr")
-    if dense and G.shape[0] == 1:
-        perm = np.argsort(-np.abs(G[0]), kind="stable")
-        rank = int(abs(G[0, perm[0]]) > 0)
-    else:
-        import scipy.linalg as la
-
-        _, r, perm = la.qr(G, mode="economic", pivoting=True)
-        rank = int(np.sum(np.abs(np.diag(r)) > 1e-12 * np.abs(r).max()))
-    pivots, keep = np.sort(perm[:rank]), np.ones(n, dtype=bool)
-    keep[pivots] = False
-    free = np.flatnonzero(keep)       # not setdiff1d: its np.unique imports numpy.ma
+    pivots, free = _pivots(G, dense)
     # G_p v_p + G_f v_f = 0  ->  v_p = -G_p⁺ G_f v_f (exact for consistent constraints)
     Gp, Gf = G[:, pivots], G[:, free]
     # rcond: scipy's lstsq default (eps), which this used before.
     elim = -np.linalg.lstsq(Gp, Gf, rcond=_EPS)[0] if free.size \
-        else np.zeros((rank, 0))
+        else np.zeros((pivots.size, 0))
     rows, cols = np.nonzero(elim)
     r = np.concatenate([free, pivots[rows]])
     c = np.concatenate([np.arange(free.size), cols])
@@ -435,6 +425,23 @@ def constraint_basis(G: np.ndarray, n: int, dense: bool = False):
     import scipy.sparse as sp
 
     return sp.csr_matrix((v, (r, c)), shape=(n, free.size))
+
+
+def _pivots(G: np.ndarray, dense: bool = False) -> tuple:
+    """``(pivots, free)``: the unknowns the constraint rows ``G`` eliminate, chosen by a
+    column-pivoted QR (a single row with ``dense``: its entry of largest magnitude, as
+    the QR chooses it, without scipy), and the others, both sorted."""
+    if dense and G.shape[0] == 1:
+        perm = np.argsort(-np.abs(G[0]), kind="stable")
+        rank = int(abs(G[0, perm[0]]) > 0)
+    else:
+        import scipy.linalg as la
+
+        _, r, perm = la.qr(G, mode="economic", pivoting=True)
+        rank = int(np.sum(np.abs(np.diag(r)) > 1e-12 * np.abs(r).max()))
+    pivots, keep = np.sort(perm[:rank]), np.ones(G.shape[1], dtype=bool)
+    keep[pivots] = False
+    return pivots, np.flatnonzero(keep)     # not setdiff1d: its np.unique imports numpy.ma
 
 
 def _modes(M, D, Ks, G, damped: bool, omega_max=None, vectors: bool = False):
@@ -1124,11 +1131,10 @@ def design_bases(ds, system, G: np.ndarray, which: np.ndarray) -> tuple:
     """Constraint bases Z_d (D', n, k) of designs ``which`` whose lever ratios differ:
     ``G``'s lever rows (the first ``len(system.levers)``, :func:`pencil`) stamped with
     each design's ratios, and every design's unknowns eliminated at the pivots the
-    template's pivoted QR chooses (:func:`constraint_basis`), v_p = −G_p⁺ G_f v_f.
+    template's pivoted QR chooses (:func:`_pivots`, as :func:`constraint_basis`),
+    v_p = −G_p⁺ G_f v_f.
     Returns ``(Z, ok)``: ``ok`` false where those pivots are ill-conditioned for the
     design (G_p's singular values more than 1e8 apart), which the single path takes."""
-    import scipy.linalg as la
-
     n, L = G.shape[1], len(system.levers)
     index = {name: i for i, name in enumerate(system.nodes)}
     lev = {lv.name: i for i, lv in enumerate(ds.circuit.levers)}
@@ -1137,10 +1143,8 @@ def design_bases(ds, system, G: np.ndarray, which: np.ndarray) -> tuple:
     for _, r, c, sign, lever, ratio in nodal.stamps((), system.levers, index):
         if r >= n:                                  # a constraint row's entry
             Gd[:, r - n, c] += sign * (ds.ratios[lev[lever.name], which] if ratio else 1.0)
-    _, R, perm = la.qr(G, mode="economic", pivoting=True)
-    rank = int(np.sum(np.abs(np.diag(R)) > 1e-12 * np.abs(R).max()))
-    pivots = np.sort(perm[:rank])
-    free = np.setdiff1d(np.arange(n), pivots)
+    pivots, free = _pivots(G)
+    rank = pivots.size
     Gp, Gf = Gd[:, :, pivots], Gd[:, :, free]
     sv = np.linalg.svd(Gp, compute_uv=False)
     ok = sv[:, rank - 1] > 1e-8 * sv[:, 0] if rank else np.ones(which.size, dtype=bool)
