@@ -691,8 +691,7 @@ def _located_peak(circuit, grid, lo: float, hi: float, quantity: str, method: Me
     found = _peak_roots(circuit, lo, hi, quantity, resonances)
     undamped = tuple(r.omega for r in found if r.zeta <= UNDAMPED_ZETA)
     if grid is None:
-        grid = sweep(circuit, np.geomspace(max(lo, hi * 1e-12), hi, 401) if lo > 0
-                     else np.linspace(lo, hi, 401), method=method, refine=refine)
+        grid = sweep(circuit, peak_grid(lo, hi), method=method, refine=refine)
     q_grid = np.abs(getattr(grid, quantity))
     finite = np.isfinite(q_grid)
     i_grid = int(np.argmax(np.where(finite, q_grid, -1.0)))
@@ -703,11 +702,10 @@ def _located_peak(circuit, grid, lo: float, hi: float, quantity: str, method: Me
     # Brackets: the grid's maximum with its neighbours, and each damped
     # resonance of the right kind ± four half-power bandwidths.
     w = grid.omega
-    brackets = [(w[max(i_grid - 1, 0)], w[min(i_grid + 1, w.size - 1)])]
-    for r in found:
-        centre = r.omega_d if r.omega_d > 0 else r.omega
-        half = max(r.zeta * r.omega, 1e-9 * r.omega)
-        brackets.append((centre - 4 * half, centre + 4 * half))
+    a, b = root_brackets(*(np.array([getattr(r, f) for r in found], dtype=float)
+                           for f in ("omega", "omega_d", "zeta")))
+    brackets = [(w[max(i_grid - 1, 0)], w[min(i_grid + 1, w.size - 1)])] + \
+        list(zip(a.tolist(), b.tolist()))
     best_value, best_omega = _peak_search(circuit, method, quantity, lo, hi, brackets,
                                           g_value, g_omega, xtol, refine)
     if math.isinf(best_value):
@@ -715,6 +713,20 @@ def _located_peak(circuit, grid, lo: float, hi: float, quantity: str, method: Me
         # not be run): unbounded all the same.
         return Peak(quantity, math.inf, best_omega, True, (best_omega,), g_value, g_omega)
     return Peak(quantity, best_value, best_omega, False, (), g_value, g_omega)
+
+
+def peak_grid(lo: float, hi: float) -> NDArray:
+    """The 401 ω of :func:`peak`'s grid over [lo, hi] (log-spaced unless lo is 0)."""
+    return np.geomspace(max(lo, hi * 1e-12), hi, 401) if lo > 0 else np.linspace(lo, hi, 401)
+
+
+def root_brackets(omega, omega_d, zeta) -> tuple[NDArray, NDArray]:
+    """The brackets :func:`peak` searches around damped roots (arrays of their ω, ω_d and
+    ζ): four half-power bandwidths ζω (at least 1e-9 ω) either side of ω_d (ω if 0)."""
+    centre = np.where(omega_d > 0, omega_d, omega)
+    with np.errstate(invalid="ignore"):
+        half = np.maximum(zeta * omega, 1e-9 * omega)
+    return centre - 4 * half, centre + 4 * half
 
 
 def _peak_band(result, omega_min, omega_max) -> tuple:

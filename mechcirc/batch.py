@@ -42,7 +42,8 @@ from ._memo import Memos
 from .circuit import Circuit, units_of
 from .errors import InputError, MechcircError, NotSeriesParallelError
 from ._sweep import (UNDAMPED_ZETA, real_omega, drive_force, drive_velocity, golden_max, peak,
-                     point_flags, singular_error, singular_limits, sweep as sweep_one)
+                     peak_grid, point_flags, root_brackets, singular_error, singular_limits,
+                     sweep as sweep_one)
 from .reduction import evaluate_designs, plan
 from .resonances import (MAX_UNKNOWNS, MAX_UNKNOWNS_DAMPED, POLISH_BELOW, Resonance, batched_roots,
                          constraint_basis, design_values, element_patterns, find_resonances,
@@ -833,7 +834,7 @@ def _searched_extremes(ds: Designs, which: NDArray, lo: float, hi: float,
     p = ds.plan(which) if which.size and covered else None
     if p is None:
         return which[:0], {}
-    grid = np.geomspace(max(lo, hi * 1e-12), hi, 401) if lo > 0 else np.linspace(lo, hi, 401)
+    grid = peak_grid(lo, hi)
     absK = np.abs(evaluate_designs(p, np.concatenate([grid, [lo, hi]]))[0])
     ok = (np.isfinite(absK) & (absK > 0)).all(axis=1)
     live = res.count[which, None] > np.arange(res.omega.shape[1])
@@ -847,12 +848,9 @@ def _searched_extremes(ds: Designs, which: NDArray, lo: float, hi: float,
         with np.errstate(divide="ignore"):     # |K| = 0: those designs are not ok
             q = absK ** sign
         i = np.argmax(q[:, :-2], axis=1)
-        centre = np.where(wd > 0, wd, w)
-        with np.errstate(invalid="ignore"):
-            half = np.maximum(zeta * w, 1e-9 * w)
-        a = np.maximum(np.column_stack([grid[np.maximum(i - 1, 0)], centre - 4 * half]), lo)
-        b = np.minimum(np.column_stack([grid[np.minimum(i + 1, grid.size - 1)],
-                                        centre + 4 * half]), hi)
+        ra, rb = root_brackets(w, wd, zeta)
+        a = np.maximum(np.column_stack([grid[np.maximum(i - 1, 0)], ra]), lo)
+        b = np.minimum(np.column_stack([grid[np.minimum(i + 1, grid.size - 1)], rb]), hi)
         use = np.column_stack([np.ones(which.size, bool), roots]) & (a < b)
         with np.errstate(divide="ignore", invalid="ignore"):
             x, v = golden_max(lambda om, sign=sign: np.abs(evaluate_designs(p, om)[0]) ** sign,
