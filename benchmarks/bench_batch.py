@@ -43,9 +43,10 @@ D = 100 and 1,000: its resonances stacked against ``find_resonances`` one
 design at a time, as for the bridge, and its extremes over 50 … 5,000 rad/s
 (resonances given) against ``mechcirc.peak`` design by design.
 
-``--levers``: instead, a lever whose ratio r is a parameter (with and without a
-damper) over a grid of r and a mass, D = 100 and 1,000: resonances stacked (a
-constraint basis per design) against ``find_resonances`` one by one.
+``--levers``: instead, ``docs/examples/lever.mcir`` with its lever ratio r and first
+mass made parameters (with and without a damper across its spring) over a grid of
+r and the mass, D = 100 and 1,000: resonances stacked (a constraint basis per
+design) against ``find_resonances`` one by one.
 
 ``--no-numba`` hides numba (``sys.modules["numba"] = None`` before mechcirc is
 imported), as in an install without it: the batch then runs in numpy.
@@ -219,22 +220,13 @@ def damped_heald(repeats):
         extremes_against_one_by_one(text, params, repeats)
 
 
-#: A lever whose ratio r is a parameter, with a damper (--levers).
-LEVERED = """\
-.param r=2 m=1.5 k=4e4 c=3
-drive V a 0 velocity=0.2
-mass  m1 a 0 {m} kg
-spring k1 a b {k/1000} N/mm
-lever L b 0 c 0 ratio=r
-mass  m2 c 0 0.4
-spring k2 c 0 {2*k}
-damper d1 b 0 c
-"""
-
-
 def levers(repeats):
-    """Designs whose lever ratio varies (--levers): stacked against one by one."""
-    for label, text in (("damped", LEVERED), ("undamped", LEVERED.replace("damper d1 b 0 c\n", ""))):
+    """Designs whose lever ratio varies (--levers): stacked against one by one, on
+    ``docs/examples/lever.mcir`` with its ratio and first mass made parameters."""
+    lever = (Path(__file__).resolve().parents[1] / "docs" / "examples" / "lever.mcir").read_text()
+    undamped = ".param r=0.5 m=2\n" + lever.replace("ratio=0.5", "ratio=r").replace(
+        "a 0 2 kg", "a 0 {m} kg")
+    for label, text in (("damped", undamped + "damper d b c 3 N*s/m\n"), ("undamped", undamped)):
         for D in (100, 1_000):
             n = round(D ** 0.5)
             g = np.meshgrid(np.linspace(0.3, 4.0, n), np.geomspace(0.3, 3.0, D // n))
