@@ -921,7 +921,7 @@ def _run_scipy(model, kern, theta_s, revolutions, npts, method, rtol, progress, 
         nfev += sol.nfev
         if keep:
             ts = (r * period) + np.arange(npts) * (period / npts)
-            ys = sol.sol(ts).T + np.array([rigid(t)[0] for t in ts])
+            ys = sol.sol(ts).T + rigid(ts)[0]
             prev, out = out, (ts, np.ascontiguousarray(ys))     # the last two revolutions
         e = sol.y[:, -1].copy()
         if progress is not None:
@@ -945,12 +945,13 @@ def _deviation_rhs(model, kern, theta_s, ripple):
     bad = [0.0]
 
     def rigid(t):
-        """The subtracted motion (lines only) and its derivative."""
+        """The subtracted motion (lines only) and its derivative at t (rows: at each of
+        an array of times)."""
         th = theta_s + omega * t
-        y = np.zeros(2 * n)
+        y = np.zeros(getattr(t, "shape", ()) + (2 * n,))
         yd = np.zeros(2 * n)
         for i, c0, c1 in lines:
-            y[i], y[n + i] = c0 + c1 * th, c1 * omega
+            y[..., i], y[..., n + i] = c0 + c1 * th, c1 * omega
             yd[i] = c1 * omega
         return y, yd
 
