@@ -22,9 +22,10 @@ With ``--breakdown`` it prints instead where one default sweep's CPU time
 goes on each path (medians of ``--repeats``): parsing, assembly, the
 pattern and the regularity check, the factorisations, the solves with their
 factors, the double-double residuals, the error estimates, the first-step
-bounds (their numpy part) and the sensitivities, each timed around its function.  The rest of the total is
-the Python between them; past 60 unknowns the regularity check's own trial
-solve is counted both in it and in the rows of its phases.
+bounds (their numpy part) and the sensitivities, each timed around its function
+and counted once: a timed phase called inside another (the pattern inside the
+regularity check; past 60 unknowns its trial factor and solves) is in its own row
+only.  The rest of the total is the Python between them.
 
 Run from the repository root::
 
@@ -98,15 +99,20 @@ def breakdown(sizes, omega, repeats) -> None:
     from mechcirc import _nodal_equations, _nodal_residual, _nodal_solvers
 
     spent: dict[str, float] = {}
+    inner: list[float] = []         # per running timed call: the time of the timed calls in it
 
     def timed(owner, name, label, wrap_result=None):
         fn = getattr(owner, name)
 
         @functools.wraps(fn)
         def run(*a, **k):
+            inner.append(0.0)
             t0 = time.process_time()
             out = fn(*a, **k)
-            spent[label] = spent.get(label, 0.0) + time.process_time() - t0
+            took = time.process_time() - t0
+            spent[label] = spent.get(label, 0.0) + took - inner.pop()
+            if inner:
+                inner[-1] += took
             return wrap_result(out) if wrap_result else out
         setattr(owner, name, run)
 
