@@ -327,6 +327,10 @@ def _store_target(k, q, qd, qdd, parts, Q, QD, QDD, PARTS):
             PARTS[k, i, c] = parts[i, c]
 
 
+# The start itself first (its sign of det J is the branch's), then continuation steps of
+# dt from (t_now, q) to t_new: a Taylor predictor from q, q̇, q̈ into the trial, then
+# Newton; the step halves while Newton fails.  One loop, so one site of the Newton and of
+# the rates (numba inlines every site: the start's own Newton and rates were a second copy).
 @_leaf
 def newton_path(t0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax,
                 Q, QD, QDD, PARTS, info, ga, gb, gs, gu, bs, work, J, piv, vec, parts):
@@ -349,10 +353,6 @@ def newton_path(t0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax
     dt = 0.0
     sign0 = 0.0
     k = 0
-    # The start itself first (its sign of det J is the branch's), then continuation steps
-    # of dt from (t_now, q) to t_new: a Taylor predictor from q, q̇, q̈ into the trial, then
-    # Newton; the step halves while Newton fails.  One site of each piece (numba inlines
-    # every site: the start's own Newton and rates were a second copy).
     while True:
         if sign0 == 0.0:
             for i in range(n):

@@ -474,41 +474,34 @@ if HAVE_NUMBA:
     _wdot = njit(cache=True, error_model="numpy", fastmath={"reassoc", "contract"})(_wdot)
 
 
+# One kernel, its sample loop included: the loop as a kernel of its own (and the stored
+# columns' count, and each split array allocated apart) cost 0.3 s more of a cold compile;
+# its arrays allocated here, where the compiler knows they overlap nothing (the caller's
+# scratch instead: the loop 4–5 % slower at 10 modes).
 @_jit
 def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout, qlast):
     """Diagonal first-order-hold recurrence q⁺ = μ q + g₁ u + g₂ (u⁺ − u), every mode.
 
-    ``mu``, ``g1``, ``g2``, ``q0``: complex (m,) per mode; ``u`` real (nt,);
-    ``out`` real (nt, ncols) receives Re q_j in column ``cre[j]`` and Im q_j in
-    column ``cim[j]`` (negative: a real mode), columns ≥ ncols not stored;
-    ``qmax[j]`` receives max_k |q_j|; ``yout[k]`` receives Σ wout[c] · (column c
-    of step k) over every column, stored or not (a scalar output); ``qlast``
-    (complex (m,)) the state at the last sample, from which a run over the
-    next samples continues.  Real arithmetic on split arrays, so the per-mode
-    update vectorises.  One kernel, its sample loop included: the loop as a kernel of
-    its own (and the stored columns' count, and each split array allocated apart) cost
-    0.5 s more of a cold compile; its arrays allocated here, where the compiler knows
-    they overlap nothing (the caller's scratch instead: the loop 4–5 % slower at 10 modes).
+    ``mu``, ``g1``, ``g2``, ``q0``: complex (m,) per mode; ``u`` real (nt,); ``out`` real
+    (nt, ncols) receives Re q_j in column ``cre[j]`` and Im q_j in column ``cim[j]``
+    (negative: a real mode), columns ≥ ncols not stored; ``qmax[j]`` receives max_k |q_j|;
+    ``yout[k]`` Σ wout[c] · (column c of step k) over every column, stored or not (a scalar
+    output); ``qlast`` (complex (m,)) the state at the last sample, from which a run over
+    the next samples continues.  Real arithmetic on split arrays: the update vectorises.
     """
-    m = mu.shape[0]
-    ncols = out.shape[1]
-    work = np.empty((11, m))
-    iwork = np.empty((2, m), np.int64)
+    m, ncols = mu.shape[0], out.shape[1]
+    work, iwork = np.empty((11, m)), np.empty((2, m), np.int64)
     # μ = mr + j mi, g₁ = ar + j ai, g₂ = br + j bi, q = qr + j qi from q0 on, output
-    # weights wr, wi, q2 the running max of |q|²
+    # weights wr, wi, q2 the running max of |q|²; identity: column j is Re q_j; n_im modes
+    # have their Im q stored (iwork: the modes, their columns)
     mr, mi, ar, ai, br, bi = work[0], work[1], work[2], work[3], work[4], work[5]
     qr, qi, wr, wi, q2 = work[6], work[7], work[8], work[9], work[10]
-    identity = True             # column j is Re q_j: a contiguous copy
-    n_im = 0                    # the modes whose Im q is stored, and their columns
+    identity, n_im = True, 0
     for j in range(m):
-        mr[j] = mu[j].real
-        mi[j] = mu[j].imag
-        ar[j] = g1[j].real
-        ai[j] = g1[j].imag
-        br[j] = g2[j].real
-        bi[j] = g2[j].imag
-        qr[j] = q0[j].real
-        qi[j] = q0[j].imag
+        mr[j], mi[j] = mu[j].real, mu[j].imag
+        ar[j], ai[j] = g1[j].real, g1[j].imag
+        br[j], bi[j] = g2[j].real, g2[j].imag
+        qr[j], qi[j] = q0[j].real, q0[j].imag
         wr[j] = wout[cre[j]]
         wi[j] = wout[cim[j]] if cim[j] >= 0 else 0.0
         q2[j] = 0.0
