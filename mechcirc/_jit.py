@@ -91,16 +91,11 @@ def internal(force_python: bool = False, nrt: bool = True):
     again; called from Python it is the plain function.  The kernels that call it hold it
     in their own cache entries.  ``nrt=False`` as for :func:`decorators`.
     """
-    if not force_python:
-        try:
-            from numba.extending import register_jitable
-        except ImportError:          # the "fast" extra is not installed
-            pass
-        else:
-            _collect_less_while_compiling()
-            flags: dict = {} if nrt else {"_nrt": False}
-            return register_jitable(error_model="numpy", **flags)
-    return _identity
+    if not decorators(force_python)[0]:         # without numba: the plain function
+        return _identity
+    from numba.extending import register_jitable
+
+    return register_jitable(error_model="numpy", **({} if nrt else {"_nrt": False}))
 
 
 _GC_RULE: list = []
