@@ -46,7 +46,7 @@ import os
 import sys
 from pathlib import Path
 
-__all__ = ["decorators", "COMPILED", "use", "in_cache", "warm_in_background"]
+__all__ = ["decorators", "internal", "COMPILED", "use", "in_cache", "warm_in_background"]
 
 #: None: each caller decides; True: always the kernel; False: never (see above).
 COMPILED: bool | None = None
@@ -80,6 +80,22 @@ def decorators(force_python: bool = False, nrt: bool = True):
             jit_inline = njit(cache=True, error_model="numpy", inline="always")
             return True, jit, jit_inline
     return False, _identity, _identity
+
+
+def internal(force_python: bool = False, nrt: bool = True):
+    """The decorator of a helper that only kernels call (never a kernel's entry from Python).
+
+    numba compiles it for each kernel that calls it (``numba.extending.register_jitable``:
+    an overload of the plain function) without the CPython wrapper and the C-callable one
+    a kernel of its own has, whose code each compiled caller links, optimises and emits
+    again; called from Python it is the plain function.  The kernels that call it hold it
+    in their own cache entries.  ``nrt=False`` as for :func:`decorators`.
+    """
+    if not decorators(force_python)[0]:         # without numba: the plain function
+        return _identity
+    from numba.extending import register_jitable
+
+    return register_jitable(error_model="numpy", **({} if nrt else {"_nrt": False}))
 
 
 _GC_RULE: list = []

@@ -21,15 +21,18 @@ import math
 
 import numpy as np
 
-from ._jit import decorators
+from ._jit import decorators, internal
 
 # The helpers are compiled apart (inlined at numba's level into the plan's loop, the cold
 # compile took 5.8 s instead of 4.1 s of CPU and the bound's loops ran up to 2.4x slower)
 # and without numba's reference counting: an atomic increment and decrement of every array
 # argument at every call, which waits for the divisions in flight (half of K's time on the
 # 999-element ladder).  Each is called once per node and block of ω, not inlined by LLVM.
+# Only evaluate_plan calls them: compiled for it without a kernel's CPython and C-callable
+# wrappers (:func:`mechcirc._jit.internal`; 0.2 s less of the cold compile, docs/performance.md,
+# "jit50").
 HAVE_NUMBA, jit, jit_inline = decorators()
-_leaf = decorators(nrt=False)[1]
+_leaf = internal(nrt=False)
 
 _U = np.finfo(float).eps / 2
 _U_RECIP = 4 * _U

@@ -43,13 +43,18 @@ from __future__ import annotations
 
 import math
 
-from .._jit import decorators
+from .._jit import decorators, internal
 
 HAVE_NUMBA, _jit, _jit_inline = decorators(bool(globals().get("_FORCE_PYTHON")))
 # A kernel or piece that allocates nothing (its scratch from the caller, or none):
 # compiled without reference counting, which inlined into a loop would cost an atomic
 # increment and decrement of every array argument per call (newton_path +25 %).
 _leaf = decorators(bool(globals().get("_FORCE_PYTHON")), nrt=False)[1]
+# The pieces newton_path calls (the equations, the LU): compiled for it alone, without the
+# CPython and C-callable wrappers of a kernel (:func:`mechcirc._jit.internal`); the layers
+# between them (_converge, _rates) inlined at their one site each, so no piece is compiled
+# twice and none is linked into more than newton_path (docs/performance.md, "jit50").
+_piece = internal(bool(globals().get("_FORCE_PYTHON")), nrt=False)
 
 #: Status codes of :func:`newton_path`.
 OK, SINGULAR_POSE, LOCK, BRANCH_JUMP = 0, 1, 2, 3
@@ -61,7 +66,7 @@ def _turn(c, s, x, y):
     return c * x - s * y, s * x + c * y
 
 
-@_jit
+@_piece
 def _sides(q, nb, ia, ib, sa, sb, cs, sn, R):
     """R(φ) s of both sides of every joint row into R (m, 4): (Rax, Ray, Rbx, Rby)."""
     for i in range(nb):
@@ -79,7 +84,7 @@ def _sides(q, nb, ia, ib, sa, sb, cs, sn, R):
             R[k, 2], R[k, 3] = sb[k, 0], sb[k, 1]
 
 
-@_jit
+@_piece
 def _prism(q, nb, ga, gb, gs, gu, bs, cs, sn, P):
     """Per slider into P (ns, 8): u, R_a s_a, R_b s_b, d = P_b − P_a (x, y each)."""
     for k in range(ga.shape[0]):
@@ -95,7 +100,7 @@ def _prism(q, nb, ga, gb, gs, gu, bs, cs, sn, P):
             P[k, 7] -= q[3 * a + 1]
 
 
-@_jit
+@_piece
 def _residual(q, t, nb, ia, ib, R, crank_idx, omega, r, ga, gb, P):
     """Φ(q, t) into r; returns max |Φ|."""
     m, ns = ia.shape[0], ga.shape[0]
@@ -124,7 +129,7 @@ def _residual(q, t, nb, ia, ib, R, crank_idx, omega, r, ga, gb, P):
     return size
 
 
-@_jit
+@_piece
 def _jacobian(nb, ia, ib, R, crank_idx, J, ga, gb, P):
     m, ns = ia.shape[0], ga.shape[0]
     J[:, :] = 0.0
@@ -157,7 +162,7 @@ def _jacobian(nb, ia, ib, R, crank_idx, J, ga, gb, P):
         J[2 * m + 2 * ns + j, 3 * crank_idx[j] + 2] = 1.0
 
 
-@_jit
+@_piece
 def _lu(A, piv):
     """LU with partial pivoting in place; returns the sign of det A, 0 if near singular.
 
@@ -199,7 +204,7 @@ def _lu(A, piv):
     return sign
 
 
-@_jit
+@_piece
 def _lu_solve(A, piv, b):
     """Solve with the factors of :func:`_lu`, b overwritten by the solution."""
     n = A.shape[0]
@@ -219,7 +224,7 @@ def _lu_solve(A, piv, b):
         b[i] = s / A[i, i]
 
 
-@_jit_inline     # two sites in newton_path, which counts no references: no layer of its own
+@_jit_inline
 def _converge(trial, t_new, nb, geo, crank_idx, omega, tol, work, r, J, piv):
     """Newton from ``trial`` (in place) at time ``t_new``.
 
@@ -230,44 +235,61 @@ def _converge(trial, t_new, nb, geo, crank_idx, omega, tol, work, r, J, piv):
     cs, sn, R, P = work
     n = trial.shape[0]
     previous = math.inf
-    for it in range(30):
+    done = False
+    # at most 30 Newton steps, and once converged one more pass for J and its LU at the
+    # converged q (for the sign and the rates), without the residual: each piece at one
+    # site, which numba inlines once
+    for it in range(31):
+        if it == 30 and not done:
+            break
         _sides(trial, nb, ia, ib, sa, sb, cs, sn, R)
         _prism(trial, nb, ga, gb, gs, gu, bs, cs, sn, P)
-        size = _residual(trial, t_new, nb, ia, ib, R, crank_idx, omega, r, ga, gb, P)
-        if not size < math.inf or (it >= 2 and size > previous):
-            return 0.0
-        previous = size
+        size = 0.0
+        if not done:
+            size = _residual(trial, t_new, nb, ia, ib, R, crank_idx, omega, r, ga, gb, P)
+            if not size < math.inf or (it >= 2 and size > previous):
+                return 0.0
+            previous = size
         _jacobian(nb, ia, ib, R, crank_idx, J, ga, gb, P)
-        if _lu(J, piv) == 0.0:
-            return 0.0
+        sign = _lu(J, piv)
+        if done or sign == 0.0:
+            return sign
         _lu_solve(J, piv, r)
         for i in range(n):
             trial[i] -= r[i]
-        if size < tol:
-            # converged; that last step polished it to rounding.  J and its LU
-            # at the converged q, for the sign and the rates
-            _sides(trial, nb, ia, ib, sa, sb, cs, sn, R)
-            _prism(trial, nb, ga, gb, gs, gu, bs, cs, sn, P)
-            _jacobian(nb, ia, ib, R, crank_idx, J, ga, gb, P)
-            return _lu(J, piv)
+        # converged; that last step polished it to rounding
+        done = size < tol
     return 0.0
 
 
-@_jit
+@_jit_inline
 def _rates(nb, geo, omega, work, J, piv, qd, qdd, parts, e):
     """q̇ = Σ_c J⁻¹ ω_c e_c (the parts) and q̈ = J⁻¹ γ from the LU of J (see the module)."""
     ia, ib, sa, sb, ga, gb, gs, gu, bs = geo
     R, P = work[2], work[3]
     n, m, ns = qd.shape[0], ia.shape[0], ga.shape[0]
+    nc = omega.shape[0]
     qd[:] = 0.0
-    for c in range(omega.shape[0]):
+    # the crank parts, then γ (which needs all of q̇): one solve site, which numba inlines once
+    for c in range(nc + 1):
         e[:] = 0.0
-        e[2 * m + 2 * ns + c] = omega[c]
+        if c < nc:
+            e[2 * m + 2 * ns + c] = omega[c]
+        else:
+            _gamma(nb, ia, ib, ga, gb, R, P, qd, e)
         _lu_solve(J, piv, e)
         for i in range(n):
-            parts[i, c] = e[i]
-            qd[i] += e[i]
-    e[:] = 0.0
+            if c < nc:
+                parts[i, c] = e[i]
+                qd[i] += e[i]
+            else:
+                qdd[i] = e[i]
+
+
+@_jit_inline
+def _gamma(nb, ia, ib, ga, gb, R, P, qd, e):
+    """γ (the q̈-free part of −Φ̈) into ``e``, from q̇ (see the module)."""
+    m, ns = ia.shape[0], ga.shape[0]
     for kk in range(m):
         a, b = ia[kk], ib[kk]
         wa = qd[3 * a + 2] ** 2 if a < nb else 0.0
@@ -292,12 +314,9 @@ def _rates(nb, geo, omega, work, J, piv, qd, qdd, parts, e):
         ey = wa * wa * P[kk, 3] - wb * wb * P[kk, 5]
         t3 = ux * ey - uy * ex
         e[2 * m + kk] = -(t1 + t2 + t3)
-    _lu_solve(J, piv, e)
-    for i in range(n):
-        qdd[i] = e[i]
 
 
-@_leaf
+@_jit_inline
 def _store_target(k, q, qd, qdd, parts, Q, QD, QDD, PARTS):
     """Target k reached: its q, q̇, q̈ and the conditional-stop parts into row k."""
     for i in range(q.shape[0]):
@@ -308,27 +327,10 @@ def _store_target(k, q, qd, qdd, parts, Q, QD, QDD, PARTS):
             PARTS[k, i, c] = parts[i, c]
 
 
-@_jit_inline     # its one site: compiled apart, LLVM optimised and emitted _converge's code again
-def _continuation_step(q, qd, qdd, trial, t_now, dt, t_new, nb, geo, crank_idx, omega, tol,
-                       wmax, work, r, J, piv):
-    """One continuation step of dt from (t_now, q) to t_new: Taylor predictor from q, q̇, q̈
-    into ``trial``, then Newton (:func:`_converge`); the step halves while Newton fails.
-
-    Returns (sign of det J at the converged ``trial``, its time), or (0, the lock time
-    estimate) when the step has shrunk to nothing (a lock).
-    """
-    while True:
-        for i in range(q.shape[0]):
-            trial[i] = q[i] + dt * (qd[i] + 0.5 * dt * qdd[i])
-        sgn = _converge(trial, t_new, nb, geo, crank_idx, omega, tol, work, r, J, piv)
-        if sgn != 0.0:
-            return sgn, t_new
-        dt *= 0.5
-        t_new = t_now + dt
-        if abs(dt) * wmax < 1e-9:
-            return 0.0, t_now + 2.0 * dt
-
-
+# The start itself first (its sign of det J is the branch's), then continuation steps of
+# dt from (t_now, q) to t_new: a Taylor predictor from q, q̇, q̈ into the trial, then
+# Newton; the step halves while Newton fails.  One loop, so one site of the Newton and of
+# the rates (numba inlines every site: the start's own Newton and rates were a second copy).
 @_leaf
 def newton_path(t0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax,
                 Q, QD, QDD, PARTS, info, ga, gb, gs, gu, bs, work, J, piv, vec, parts):
@@ -344,39 +346,49 @@ def newton_path(t0, targets, ia, ib, sa, sb, crank_idx, omega, tol, dt_max, wmax
     """
     n = vec.shape[1]
     nb = n // 3
+    N = targets.shape[0]
     geo = (ia, ib, sa, sb, ga, gb, gs, gu, bs)
     q, qd, qdd, trial, e, r = vec[0], vec[1], vec[2], vec[3], vec[4], vec[5]
-    t_now = t0
-    # the start itself first: its sign of det J is the branch's
-    for i in range(n):
-        trial[i] = q[i]
-    sign0 = _converge(trial, t0, nb, geo, crank_idx, omega, tol, work, r, J, piv)
-    if sign0 == 0.0:
-        return SINGULAR_POSE
-    for i in range(n):
-        q[i] = trial[i]
-    _rates(nb, geo, omega, work, J, piv, qd, qdd, parts, e)
-    k = int(0)      # not 0: a literal would have numba compile _store_target twice
-    while k < targets.shape[0]:
-        t_new = targets[k]
-        dt = t_new - t_now
-        if dt == 0.0:
-            _store_target(k, q, qd, qdd, parts, Q, QD, QDD, PARTS)
-            k += 1
-            continue
-        if dt > dt_max or dt < -dt_max:
-            dt = dt_max if dt > 0.0 else -dt_max
+    t_now = t_new = t0
+    dt = 0.0
+    sign0 = 0.0
+    k = 0
+    while True:
+        if sign0 == 0.0:
+            for i in range(n):
+                trial[i] = q[i]
+        else:
+            for i in range(n):
+                trial[i] = q[i] + dt * (qd[i] + 0.5 * dt * qdd[i])
+        sgn = _converge(trial, t_new, nb, geo, crank_idx, omega, tol, work, r, J, piv)
+        if sign0 == 0.0:
+            if sgn == 0.0:
+                return SINGULAR_POSE
+            sign0 = sgn
+        elif sgn == 0.0:
+            dt *= 0.5
             t_new = t_now + dt
-        sgn, t_new = _continuation_step(q, qd, qdd, trial, t_now, dt, t_new, nb, geo, crank_idx,
-                                        omega, tol, wmax, work, r, J, piv)
-        if sgn == 0.0:
-            info[0] = t_new
-            return LOCK
-        if sgn != sign0:
+            if abs(dt) * wmax < 1e-9:       # the step has shrunk to nothing: a lock
+                info[0] = t_now + 2.0 * dt
+                return LOCK
+            continue
+        elif sgn != sign0:
             info[0], info[1] = t_now, t_new
             return BRANCH_JUMP
         t_now = t_new
         for i in range(n):
             q[i] = trial[i]
         _rates(nb, geo, omega, work, J, piv, qd, qdd, parts, e)
-    return OK
+        # the targets reached, then the next step towards the next one
+        while k < N:
+            t_new = targets[k]
+            dt = t_new - t_now
+            if dt != 0.0:
+                break
+            _store_target(k, q, qd, qdd, parts, Q, QD, QDD, PARTS)
+            k += 1
+        if k == N:
+            return OK
+        if dt > dt_max or dt < -dt_max:
+            dt = dt_max if dt > 0.0 else -dt_max
+            t_new = t_now + dt

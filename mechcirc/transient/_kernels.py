@@ -474,32 +474,43 @@ if HAVE_NUMBA:
     _wdot = njit(cache=True, error_model="numpy", fastmath={"reassoc", "contract"})(_wdot)
 
 
+# One kernel, its sample loop included: the loop as a kernel of its own (and the stored
+# columns' count, and each split array allocated apart) cost 0.3 s more of a cold compile;
+# its arrays allocated here, where the compiler knows they overlap nothing (the caller's
+# scratch instead: the loop 4–5 % slower at 10 modes).
 @_jit
-def _stored(cols, ncols):
-    """(modes, columns) of the entries of ``cols`` that name a stored column (0 … ncols−1)."""
-    n = 0
-    for c in cols:
-        n += 1 if 0 <= c < ncols else 0
-    modes = np.empty(n, np.int64)
-    where = np.empty(n, np.int64)
-    n = 0
-    for j in range(cols.shape[0]):
-        if 0 <= cols[j] < ncols:
-            modes[n] = j
-            where[n] = cols[j]
-            n += 1
-    return modes, where
+def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout, qlast):
+    """Diagonal first-order-hold recurrence q⁺ = μ q + g₁ u + g₂ (u⁺ − u), every mode.
 
-
-@_leaf
-def _modal_samples(u, mr, mi, ar, ai, br, bi, qr, qi, wr, wi, q2, identity, cre, im_mode,
-                   im_col, out, yout):
-    """The sample loop of :func:`modal_run` on its split arrays (μ = mr + j mi, g₁ = ar +
-    j ai, g₂ = br + j bi, q = qr + j qi from q0 on, output weights wr, wi): q updated in
-    place, q2 the running max of |q|², rows of ``out`` (Re q_j in column cre[j] if stored,
-    ``identity``: column j; Im q of mode im_mode[p] in column im_col[p]) and ``yout``."""
-    m = mr.shape[0]
-    ncols = out.shape[1]
+    ``mu``, ``g1``, ``g2``, ``q0``: complex (m,) per mode; ``u`` real (nt,); ``out`` real
+    (nt, ncols) receives Re q_j in column ``cre[j]`` and Im q_j in column ``cim[j]``
+    (negative: a real mode), columns ≥ ncols not stored; ``qmax[j]`` receives max_k |q_j|;
+    ``yout[k]`` Σ wout[c] · (column c of step k) over every column, stored or not (a scalar
+    output); ``qlast`` (complex (m,)) the state at the last sample, from which a run over
+    the next samples continues.  Real arithmetic on split arrays: the update vectorises.
+    """
+    m, ncols = mu.shape[0], out.shape[1]
+    work, iwork = np.empty((11, m)), np.empty((2, m), np.int64)
+    # μ = mr + j mi, g₁ = ar + j ai, g₂ = br + j bi, q = qr + j qi from q0 on, output
+    # weights wr, wi, q2 the running max of |q|²; identity: column j is Re q_j; n_im modes
+    # have their Im q stored (iwork: the modes, their columns)
+    mr, mi, ar, ai, br, bi = work[0], work[1], work[2], work[3], work[4], work[5]
+    qr, qi, wr, wi, q2 = work[6], work[7], work[8], work[9], work[10]
+    identity, n_im = True, 0
+    for j in range(m):
+        mr[j], mi[j] = mu[j].real, mu[j].imag
+        ar[j], ai[j] = g1[j].real, g1[j].imag
+        br[j], bi[j] = g2[j].real, g2[j].imag
+        qr[j], qi[j] = q0[j].real, q0[j].imag
+        wr[j] = wout[cre[j]]
+        wi[j] = wout[cim[j]] if cim[j] >= 0 else 0.0
+        q2[j] = 0.0
+        identity = identity and cre[j] == j
+        if 0 <= cim[j] < ncols:
+            iwork[0, n_im] = j
+            iwork[1, n_im] = cim[j]
+            n_im += 1
+    im_mode, im_col = iwork[0, :n_im], iwork[1, :n_im]
     for k in range(u.shape[0]):
         if k > 0:
             uk = u[k - 1]
@@ -513,7 +524,7 @@ def _modal_samples(u, mr, mi, ar, ai, br, bi, qr, qi, wr, wi, q2, identity, cre,
             a = qr[j] * qr[j] + qi[j] * qi[j]
             q2[j] = a if not a <= q2[j] else q2[j]      # (a NaN stays: it is absorbing)
         yout[k] = _wdot(wr, qr, wi, qi)
-        if identity:                # column j is Re q_j: a contiguous copy
+        if identity:
             for j in range(min(m, ncols)):
                 out[k, j] = qr[j]
         else:
@@ -523,53 +534,6 @@ def _modal_samples(u, mr, mi, ar, ai, br, bi, qr, qi, wr, wi, q2, identity, cre,
                     out[k, c] = qr[j]
         for p in range(im_mode.shape[0]):
             out[k, im_col[p]] = qi[im_mode[p]]
-
-
-@_jit
-def modal_run(mu, g1, g2, q0, u, cre, cim, out, qmax, wout, yout, qlast):
-    """Diagonal first-order-hold recurrence q⁺ = μ q + g₁ u + g₂ (u⁺ − u), every mode.
-
-    ``mu``, ``g1``, ``g2``, ``q0``: complex (m,) per mode; ``u`` real (nt,);
-    ``out`` real (nt, ncols) receives Re q_j in column ``cre[j]`` and Im q_j in
-    column ``cim[j]`` (negative: a real mode), columns ≥ ncols not stored;
-    ``qmax[j]`` receives max_k |q_j|; ``yout[k]`` receives Σ wout[c] · (column c
-    of step k) over every column, stored or not (a scalar output); ``qlast``
-    (complex (m,)) the state at the last sample, from which a run over the
-    next samples continues.  Real arithmetic on split arrays, so the per-mode
-    update vectorises.
-    """
-    m = mu.shape[0]
-    ncols = out.shape[1]
-    mr = np.empty(m)
-    mi = np.empty(m)
-    ar = np.empty(m)
-    ai = np.empty(m)
-    br = np.empty(m)
-    bi = np.empty(m)
-    qr = np.empty(m)
-    qi = np.empty(m)
-    wr = np.zeros(m)
-    wi = np.zeros(m)
-    q2 = np.zeros(m)
-    for j in range(m):
-        mr[j] = mu[j].real
-        mi[j] = mu[j].imag
-        ar[j] = g1[j].real
-        ai[j] = g1[j].imag
-        br[j] = g2[j].real
-        bi[j] = g2[j].imag
-        qr[j] = q0[j].real
-        qi[j] = q0[j].imag
-        wr[j] = wout[cre[j]]
-        if cim[j] >= 0:
-            wi[j] = wout[cim[j]]
-    identity = bool(True)      # not True: a literal would have numba compile _modal_samples twice
-    for j in range(m):
-        if cre[j] != j:
-            identity = False
-    im_mode, im_col = _stored(cim, ncols)
-    _modal_samples(u, mr, mi, ar, ai, br, bi, qr, qi, wr, wi, q2, identity, cre, im_mode,
-                   im_col, out, yout)
     for j in range(m):
         qmax[j] = math.sqrt(q2[j])
         qlast[j] = complex(qr[j], qi[j])
