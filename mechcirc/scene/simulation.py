@@ -945,8 +945,8 @@ def _deviation_rhs(model, kern, theta_s, ripple):
     bad = [0.0]
 
     def rigid(t):
-        """The subtracted motion (lines only) and its derivative at t (rows: at each of
-        an array of times)."""
+        """The subtracted motion (lines only) at t, a row at each of an array of times,
+        and its derivative (the same at every t)."""
         th = theta_s + omega * t
         y = np.zeros(getattr(t, "shape", ()) + (2 * n,))
         yd = np.zeros(2 * n)

@@ -283,13 +283,14 @@ def forced_amplitude(lin, omega: float, cycles_measure: int = 4) -> float:
     from scipy.linalg import expm
 
     n = lin.M.shape[0]
-    slow = float(np.min(np.abs(np.linalg.eigvals(lin.state_matrix()).real)))  # of ż = A z [1/s]
+    free = lin.state_matrix()                           # ż = A z with the drive held [1/s]
+    slow = float(np.min(np.abs(np.linalg.eigvals(free).real)))
     period = 2 * math.pi / omega
     if not 40.0 < slow * period * MAX_SETTLE_PERIODS:
         return math.nan                                 # not measured: HARMONIC_UNSETTLED
     samples = 400                                       # steps per period
     A = np.zeros((2 * n + 2, 2 * n + 2))
-    A[:2 * n, :2 * n] = lin.state_matrix()
+    A[:2 * n, :2 * n] = free
     A[n:2 * n, 2 * n] = np.linalg.solve(lin.M, lin.K_drive) / omega   # φ2 = sin(ωt)/ω
     A[n:2 * n, 2 * n + 1] = np.linalg.solve(lin.M, lin.C_drive)      # φ̇2 = cos(ωt)
     A[2 * n, 2 * n + 1], A[2 * n + 1, 2 * n] = omega, -omega
