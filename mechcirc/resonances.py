@@ -32,8 +32,9 @@ reported ``error`` is the uncertainty of K there over its slope, plus the
 last step, including the effect of rounding the element values.
 
 A mode that appears in both problems at the same frequency is not seen from
-the drive (it cancels in K) and is not reported.  Zero-frequency (rigid-body)
-modes are not reported.
+the drive (it cancels in K) and is not reported; a close pair that K itself
+shows (a weakly coupled mode, :func:`_pair_seen`) is.  Zero-frequency
+(rigid-body) modes are not reported.
 """
 
 from __future__ import annotations
@@ -231,7 +232,8 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
     # Small networks: dense matrices from the stamps, and no scipy for undamped ones.
     M, D, Ks, G_released, G_held, damped = pencil(system, dense=system.size <= nodal.DENSE_LIMIT)
     held, v_held, released, v_released, keep_h, keep_r = _solved(
-        M, D, Ks, G_released, G_held, damped, omega_max, vectors)
+        M, D, Ks, G_released, G_held, damped, omega_max, vectors,
+        lambda h, r: _pair_seen(system, h, r))
     pairs = []          # ((kind, s, error, must polish), (vector, repeated)) of each root
     for name, found, V, keep in (("resonance", held, v_held, keep_h),
                                  ("antiresonance", released, v_released, keep_r)):
@@ -278,7 +280,8 @@ def check_omega_max(omega_max) -> None:
         raise InputError(f"omega_max must be > 0 rad/s or None, got {omega_max!r}")
 
 
-def _solved(M, D, Ks, G_released, G_held, damped: bool, omega_max, vectors: bool) -> tuple:
+def _solved(M, D, Ks, G_released, G_held, damped: bool, omega_max, vectors: bool,
+            seen=None) -> tuple:
     """``(held, its vectors, released, its vectors, keep held, keep released)``: both
     eigenproblems (:func:`_modes`; LAPACK's failures reported as :class:`SolverError`) and
     which roots survive :func:`_cancel`."""
@@ -288,17 +291,17 @@ def _solved(M, D, Ks, G_released, G_held, damped: bool, omega_max, vectors: bool
         # no massless or rigid direction) the held roots and vectors follow from them.
         if vectors and G_released.size == 0 and v_released is not None and not damped and \
                 v_released.shape[1] == M.shape[0] and \
-                (found := _secular_held(v_released, released, G_held[-1])) is not None:
+                (found := _secular_held(v_released, released, G_held[-1], seen)) is not None:
             return found[0], found[1], released, v_released, *found[2]
         held, v_held = _modes(M, D, Ks, G_held, damped, omega_max, vectors)
     except np.linalg.LinAlgError as exc:
         # Seen only for values spanning most of float64's range (1e-320 … 1e220).
         raise SolverError(f"resonances: the eigenvalue solver failed ({exc}); element "
                           "values span too many orders of magnitude", status="lapack") from None
-    return held, v_held, released, v_released, *_cancel(held, released)
+    return held, v_held, released, v_released, *_cancel(held, released, seen)
 
 
-def _secular_held(V, released: np.ndarray, g: np.ndarray) -> tuple | None:
+def _secular_held(V, released: np.ndarray, g: np.ndarray, seen=None) -> tuple | None:
     """``(held, its vectors, (keep held, keep released))`` as :func:`_solved` gives them,
     from the complete released modes ``V`` (M-orthonormal) and roots ``released``; None
     where not confirmed.
@@ -335,7 +338,7 @@ def _secular_held(V, released: np.ndarray, g: np.ndarray) -> tuple | None:
     # The released roots' estimate eps·λ_max/λ·√n (_undamped_roots) at λ_max, carried to λ.
     err = released[-1, 1].real / w ** 2
     held = np.column_stack([1j * top * w, err, np.full(w.size, released[0, 2])])
-    keep = _cancel(held, released)
+    keep = _cancel(held, released, seen)
     which = order[keep[0]] - (w.size - len(found))          # among dlasd4's roots
     if np.any(which < 0):
         return None
@@ -835,9 +838,13 @@ def _damped(M, D, K, vectors: bool = False) -> tuple:
     return s, np.where(np.abs(s) <= 1.0, Z[:n], Z[n:] / np.where(s == 0, 1.0, s))
 
 
-def _cancel(held: np.ndarray, released: np.ndarray):
+def _cancel(held: np.ndarray, released: np.ndarray, seen=None):
     """Which modes to keep (two masks): not those present in both problems (they
-    do not appear in K)."""
+    do not appear in K).
+
+    A held root within 1e3 times the two estimates of a released one is taken for
+    the same mode unless ``seen(s_held, s_released)`` (:func:`_pair_seen`) finds
+    the pair of a weakly coupled mode in K itself."""
     keep_h, keep_r = np.ones(len(held), bool), np.ones(len(released), bool)
     for i, (s, err, _) in enumerate(held if len(released) else ()):
         d = np.abs(released[:, 0] - s) / abs(s)
@@ -845,9 +852,33 @@ def _cancel(held: np.ndarray, released: np.ndarray):
         j = int(np.argmin(d))
         # The same sub-network's mode, computed twice, agrees to rounding; distinct
         # modes of long chains can lie within 1e-8 of each other, so use the estimates.
-        if d[j] < 1e3 * (abs(err) + abs(released[j, 1])):
+        if d[j] < 1e3 * (abs(err) + abs(released[j, 1])) and not (
+                seen is not None and d[j] > abs(err) + abs(released[j, 1]) and
+                _alone(s, released[j, 0], held[:, 0], released[:, 0]) and
+                seen(s, released[j, 0])):
             keep_h[i] = keep_r[j] = False
     return keep_h, keep_r
+
+
+def _alone(h: complex, r: complex, held: np.ndarray, released: np.ndarray) -> bool:
+    """Whether no root but the pair ``h``, ``r`` lies within 4|h − r| of its midpoint."""
+    near = np.abs(np.concatenate([held, released]) - (h + r) / 2) <= 4 * abs(h - r)
+    return int(near.sum()) == 2
+
+
+def _pair_seen(system, h: complex, r: complex) -> bool:
+    """Whether K of ``system`` has a zero at ``h`` and a pole at ``r`` (a mode the drive
+    sees, weakly), not neither (one mode, unseen, in both problems).
+
+    Near the pair K ≈ K₀(s − h)/(s − r), K₀ about constant (:func:`_alone`: no other
+    root within 4|h − r|): one step beyond each root, at 2r − h and 2h − r, the
+    quotient of K is 2 / ½ = 4 where the pair is in K, 1 where it cancels.  Told
+    apart at 2 when K is known there to 10 % (else: not seen, the pair cancels).
+    """
+    K, dK = nodal.evaluate_complex(system, np.array([2 * r - h, 2 * h - r]))
+    with np.errstate(all="ignore"):
+        known = np.all(dK <= 0.1 * np.abs(K))
+        return bool(known and abs(K[0]) > 2 * abs(K[1]))
 
 
 def _make(kind: Kind, s: complex, err: float) -> Resonance:

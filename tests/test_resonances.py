@@ -163,6 +163,63 @@ def test_damped_ladder_roots_are_within_their_error_of_mpmath():
         assert r.error < 1e-6
 
 
+def _check_pair_against_mpmath(found, spec, near, dps=30):
+    """The resonance and the anti-resonance within 1e-6 of ``near`` are one each, and
+    each is within its error of the root mpmath finds from it."""
+    from reference import mp_nodal
+
+    pair = [r for r in found if abs(r.omega - near) <= 1e-6 * near]
+    assert sorted(r.kind for r in pair) == ["antiresonance", "resonance"], pair
+    for r in pair:
+        s = complex(-r.zeta * r.omega, r.omega_d)
+        exact = mp_nodal.root(spec, s, r.kind == "antiresonance", dps)
+        assert abs(abs(exact) - r.omega) <= r.error * abs(exact), (r, exact)
+    return pair
+
+
+def test_weakly_coupled_pair_of_the_damped_ladder_is_reported():
+    """The 45-element ladder's mode at 516.08 rad/s is seen from the drive only weakly:
+    K has its zero and pole 3.0e-11 apart (relative), 4 000 times their estimates (about
+    3.7e-15 each), and was taken for one mode in both problems and dropped (1e3 × the
+    estimates).  K itself (mpmath, 40 digits) is 0.0537 and 0.0134 one step beyond each."""
+    from reference import mp_nodal
+
+    text, lines = _ladder(45)
+    found = mechcirc.parse(text).resonances()
+    spec = _spec(lines)
+    res, anti = sorted(_check_pair_against_mpmath(found, spec, 516.081048),
+                       key=lambda r: r.kind != "resonance")
+    assert 1e-11 < abs(res.omega - anti.omega) / res.omega < 1e-10
+    h, r = (complex(-x.zeta * x.omega, x.omega_d) for x in (res, anti))
+    beyond = [abs(complex(mp_nodal.K(spec, z, 40))) for z in (2 * r - h, 2 * h - r)]
+    assert beyond[0] / beyond[1] == pytest.approx(4, rel=1e-3)
+
+
+def test_weakly_coupled_pair_of_an_undamped_chain_is_reported():
+    """Fuzzing the batched path against this one (4-node chain, trial 210 of seed 2):
+    the mode of n4 (mass ml3 between n3 and n4, spring sg4 to the frame), seen through
+    the stiff n3, puts K's zero and pole 7.8e-10 apart; the batched path kept them, this
+    one dropped them.  Both roots are within their errors of mpmath's, and so are the
+    batched path's."""
+    elements = [("mass", "n1", "0", 0.919912), ("spring", "n1", "0", 2656.56),
+                ("spring", "n1", "n2", 170.494), ("mass", "n2", "0", 5.72502),
+                ("spring", "n2", "0", 85313.2), ("spring", "n2", "n3", 26040.2),
+                ("spring", "n3", "0", 173416), ("mass", "n3", "n4", 1.79665),
+                ("spring", "n4", "0", 101.078)]
+    text = "drive V n1 0 velocity=1\n" + "".join(
+        f"{kind} x{i} {a} {b} {v}\n" for i, (kind, a, b, v) in enumerate(elements))
+    spec = {"elements": elements, "levers": [], "drive": ("n1", "0")}
+    found = mechcirc.parse(text).resonances()
+    pair = _check_pair_against_mpmath(found, spec, 7.4986502)
+    assert 5e-10 < abs(pair[0].omega - pair[1].omega) / pair[0].omega < 1e-9
+    assert len(found) == 5
+    batched = mechcirc.designs(text.replace("5.72502", "{p*5.72502}").replace(
+        "drive", ".param p=1\ndrive"), {"p": [1.0, 1.0]}).resonances()
+    assert [x.kind for x in batched.list(0)] == [x.kind for x in found]
+    for a, b in zip(batched.list(0), found):
+        assert abs(a.omega - b.omega) <= (a.error + b.error) * b.omega
+
+
 def test_damped_network_above_the_dense_limit_is_solved_in_a_band(monkeypatch):
     """Shift-invert Arnoldi in a band gives the dense solver's roots (forced by a low limit)."""
     text, _ = _ladder(300)

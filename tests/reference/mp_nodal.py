@@ -131,7 +131,13 @@ def inverse_K(spec, s, dps: int = 40):
 
 
 def root(spec, s0, pole: bool, dps: int = 40) -> complex:
-    """The zero of K (or of 1/K if ``pole``) nearest the start s0, by mpmath.findroot."""
+    """The zero of K (or of 1/K if ``pole``) nearest the start s0, by mpmath.findroot.
+
+    The secant starts from s0 and s0·(1 + 1e-12), not mpmath's default s0 + 1/4: a
+    weakly coupled mode puts a pole of K within 3e-11 of the zero sought (the
+    45-element ladder's pair at 516.08 rad/s), and a first step of 1/4 lands past it."""
     with mpmath.workdps(dps):
         f = (lambda s: inverse_K(spec, s, dps)) if pole else (lambda s: K(spec, s, dps))
-        return complex(mpmath.findroot(f, mpmath.mpc(s0), tol=mpmath.mpf(10) ** (-dps)))
+        x0 = mpmath.mpc(s0)
+        return complex(mpmath.findroot(f, (x0, x0 * (1 + mpmath.mpf(10) ** -12)),
+                                       tol=mpmath.mpf(10) ** (-dps)))
