@@ -46,7 +46,7 @@ from ._sweep import (UNDAMPED_ZETA, real_omega, drive_force, drive_velocity, gol
                      sweep as sweep_one)
 from .reduction import evaluate_designs, plan
 from .resonances import (MAX_UNKNOWNS, MAX_UNKNOWNS_DAMPED, POLISH_BELOW, Resonance, batched_roots,
-                         constraint_basis, design_values, element_patterns, find_resonances,
+                         constraint_basis, design_values, exact_basis, element_patterns, find_resonances,
                          g_and_bound, held_and_released, pencil, secant_polish, settled,
                          shared_roots_free, sorted_roots, stacked_problem, template_levers)
 from .sources import brief, data_frame, summary_repr
@@ -587,8 +587,8 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
     *_, G_released, G_held, damped = pencil(system)
     B, nn = element_patterns(system), len(system.nodes)
     S, parts = _stacked_matrices(ds, system, which)
-    roots = [_pencil_roots(constraint_basis(G, nn).toarray(), B, S, damped, omega_max)
-             for G in (G_held, G_released)]
+    roots = [_pencil_roots(constraint_basis(G, nn).toarray(), B, S, damped, omega_max,
+                           exact_basis(G)) for G in (G_held, G_released)]
     if None in roots:
         return None
     (s_h, e_h, ok_h, must_h), (s_r, e_r, ok_r, must_r) = roots
@@ -613,8 +613,9 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
     return (which[keep], *sorted_roots(pole, s, err))
 
 
-def _pencil_roots(Z, B: dict, S, damped: bool, omega_max):
-    """``(roots, errors, ok, must polish)`` on basis ``Z``; None: too big."""
+def _pencil_roots(Z, B: dict, S, damped: bool, omega_max, exact: bool = True):
+    """``(roots, errors, ok, must polish)`` on basis ``Z`` (``exact``: see
+    :func:`mechcirc.resonances.exact_basis`); None: too big."""
     if Z.shape[1] > (MAX_UNKNOWNS_DAMPED if damped else MAX_UNKNOWNS):
         return None
     x, e, ok = stacked_problem(Z, B, S, damped, omega_max)
@@ -626,7 +627,8 @@ def _pencil_roots(Z, B: dict, S, damped: bool, omega_max):
     k = P.shape[1]
     diagonal = not np.any(P * (1 - np.eye(k)))
     mass = S @ P[:, np.arange(k), np.arange(k)] if k else np.ones((S.shape[0], 1))
-    must = ~(diagonal & (mass > 1e-13 * mass.max(axis=1, initial=0.0)[:, None]).all(axis=1))
+    must = ~(exact & diagonal &
+             (mass > 1e-13 * mass.max(axis=1, initial=0.0)[:, None]).all(axis=1))
     return 1j * x, e, ok, must
 
 

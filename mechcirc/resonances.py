@@ -240,12 +240,20 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
         rep = _repeated(found[:, 0]) if vectors else np.zeros(len(found), bool)
         pairs += [((name, *found[i]), (None if V is None else V[:, i], bool(rep[i])))
                   for i in np.flatnonzero(keep)]
-    # Of the kind asked (root by root: the others' polish changes nothing here) and in
-    # the band, with a margin (polishing may move a root across its edge).
-    pairs = [(t, v) for t, v in pairs if (kind is None or t[0] == kind) and
+    # Each root's distance to the nearest of the other kind (a pole of the g it is a zero
+    # of), which bounds its polish's first step.  Then those of the kind asked (root by
+    # root: the others' polish changes nothing here) and in the band, with a margin
+    # (polishing may move a root across its edge).
+    s_all = np.array([t[1] for t, _ in pairs], dtype=complex)
+    anti = np.array([t[0] == "antiresonance" for t, _ in pairs], dtype=bool)
+    spacing = np.empty(s_all.size)
+    for here in (anti, ~anti):
+        spacing[here] = _spacing(s_all[here], s_all[~here])
+    asked = [i for i, (t, _) in enumerate(pairs) if (kind is None or t[0] == kind) and
              (omega_max is None or abs(t[1]) <= omega_max * (1 + 1e-6))]
-    roots = [t for t, _ in pairs]
-    out = [(r, v) for r, v in zip(_polish(system, roots, damped), [x for _, x in pairs])
+    roots = [pairs[i][0] for i in asked]
+    out = [(r, pairs[i][1]) for r, i in zip(_polish(system, roots, damped, spacing[asked]),
+                                            asked)
            if omega_max is None or r.omega <= omega_max] if roots else []
     out = sorted(out, key=lambda rv: (rv[0].omega, rv[0].kind))
     ties = tie_order(np.array([[r.kind == "antiresonance" for r, _ in out]], bool),
@@ -488,6 +496,8 @@ def _modes(M, D, Ks, G, damped: bool, omega_max=None, vectors: bool = False):
                           f"{scale_m:.3g} kg) are too far apart for float64", status="range")
     if not damped:
         s, err, must, U = _undamped_roots(Mr / scale_m, Kr / scale_k, w_ref, vectors)
+        if not exact_basis(G):
+            must = np.ones(s.size)
     else:
         with np.errstate(all="ignore"):
             scaled = (Mr / scale_m, Dr / (scale_m * w_ref), Kr / scale_k)
@@ -510,6 +520,16 @@ def _rounding_factor(n: int) -> float:
     eigen-solve's roots ω: the reductions' rounding grows with n (against the grids'
     closed form, 225 … 1,600 unknowns, banded: 0.24–0.41·√n), so √n, at least 4."""
     return max(4.0, float(np.sqrt(n)))
+
+
+def exact_basis(G: np.ndarray) -> bool:
+    """Whether :func:`constraint_basis` of the rows ``G`` is exact: no rows, or one row
+    of 0 and ±1 (the drive's, v_a − v_b = 0).  A lever's row is eliminated with a
+    rounding amplified by the condition of the pivot block (about 300 × eps for a
+    ratio of 305), which the eigenvalue bound of the projected pencil does not hold,
+    so its network's roots are polished on K (a root 1.8e-13 off with a bound of
+    8.9e-16 was reported before)."""
+    return G.shape[0] == 0 or (G.shape[0] == 1 and bool(np.isin(G, (-1.0, 0.0, 1.0)).all()))
 
 
 def _undamped_roots(M, K, w_ref: float, vectors: bool):
@@ -892,7 +912,28 @@ def _make(kind: Kind, s: complex, err: float) -> Resonance:
 POLISH_BELOW = 1e-13
 
 
-def _polish(system, roots: list, damped: bool) -> list[Resonance]:
+def _spacing(s: np.ndarray, other: np.ndarray) -> np.ndarray:
+    """Each root of ``s``'s distance to the nearest of ``other`` (inf where none).
+
+    ``other`` sorted by |s|, its k-th entries on each side of a root's place are
+    compared for k = 0, 1, … until every root's next ones differ from it in |s| by
+    more than its nearest yet (| |a| − |b| | ≤ |a − b|): no table of all distances."""
+    best = np.full(s.size, np.inf)
+    order = np.argsort(np.abs(other), kind="stable")
+    z, m, ms = other[order], np.abs(other[order]), np.abs(s)
+    pos = np.searchsorted(m, ms)
+    for k in range(other.size):
+        for at in (pos + k, pos - 1 - k):
+            ok = (at >= 0) & (at < other.size)
+            best[ok] = np.minimum(best[ok], np.abs(s[ok] - z[at[ok]]))
+        up, down = pos + k + 1, pos - 2 - k
+        if np.all((up >= other.size) | (m[np.minimum(up, other.size - 1)] - ms >= best)) and \
+                np.all((down < 0) | (ms - m[np.maximum(down, 0)] >= best)):
+            break
+    return best
+
+
+def _polish(system, roots: list, damped: bool, spacing) -> list[Resonance]:
     """Each root polished on the circuit's own K(s) by a complex secant iteration.
 
     K(s) comes from the nodal matrices at complex frequency, A(s) = D + C +
@@ -903,7 +944,9 @@ def _polish(system, roots: list, damped: bool) -> list[Resonance]:
     times a safety factor of 4), plus the last secant step.  Undamped roots whose eigenvalue bound (Weyl:
     eps·λ_max/λ) is already below :data:`POLISH_BELOW` keep it; a root the
     secant does not confirm (it leaves for another root) keeps its
-    eigen-solver value and estimate.
+    eigen-solver value and estimate.  The secant's first step stays within a quarter of
+    the root's ``spacing``, the distance to the nearest root of the other kind (a pole of
+    the g it is a zero of).
     """
     kinds = [k for k, _, _, _ in roots]
     s0 = np.array([complex(s) for _, s, _, _ in roots])
@@ -914,7 +957,8 @@ def _polish(system, roots: list, damped: bool) -> list[Resonance]:
     if todo.size:
         pole = np.array([kinds[i] == "antiresonance" for i in todo])
         s_new[todo], e_new[todo] = secant_polish(lambda x: _g_and_delta(system, x, pole),
-                                                 s0[todo], e0[todo], damped)
+                                                 s0[todo], e0[todo], damped,
+                                                 spacing[todo])
     s_new = settled(s_new, e_new, damped)
     return [_make(k, s, max(e, _EPS)) for k, s, e in zip(kinds, s_new, e_new)]
 
@@ -950,9 +994,12 @@ def g_and_bound(pole: np.ndarray, evaluate, live: np.ndarray):
     return g, dg
 
 
-def secant_steps(g_and_delta, admissible, s0, e0, offset, active=True, iterations: int = 12):
-    """Secant steps on g from ``s0`` and ``s0`` less ``offset`` times its error ``e0``,
-    element-wise over arrays of roots; returns (s, relative error).
+def secant_steps(g_and_delta, admissible, s0, e0, offset, active=True, iterations: int = 12,
+                 spacing=np.inf):
+    """Secant steps on g from ``s0`` and ``s0`` less ``offset`` times its error ``e0``
+    (at least 1e-9 relative, at most a quarter of ``spacing``, the distance to the
+    nearest pole of g: a first step past it says nothing of the root), element-wise over
+    arrays of roots; returns (s, relative error).
 
     ``g_and_delta(x)`` gives g and the bound of its error at x; ``admissible(c)``
     the step's point as it may be taken (e.g. projected on the jω axis) and
@@ -963,7 +1010,7 @@ def secant_steps(g_and_delta, admissible, s0, e0, offset, active=True, iteration
     below 10 Newton steps |g/g'| at ``s0`` (how far the circuit's own K says the
     root is).
     """
-    h = np.maximum(np.abs(s0) * np.maximum(e0, 1e-9), 1e-300)
+    h = np.maximum(np.minimum(np.abs(s0) * np.maximum(e0, 1e-9), spacing / 4), 1e-300)
     a, b = s0 - h * offset, s0.copy()
     ga, _ = g_and_delta(a)
     gb, db = g_and_delta(b)
@@ -1001,17 +1048,20 @@ def secant_steps(g_and_delta, admissible, s0, e0, offset, active=True, iteration
     return np.where(bad, s0, b), np.where(bad, np.maximum(e0, newton), np.maximum(err, _EPS))
 
 
-def secant_polish(g_and_delta, s0: np.ndarray, e0: np.ndarray, damped: bool):
-    """The roots ``s0`` (eigen-solver's estimate ``e0``) polished by the complex secant
-    on ``g_and_delta(s) -> (g, bound of g)``; returns (s, relative error).  Used for one
-    circuit (:func:`_polish`) and for the roots of many designs (:mod:`mechcirc.batch`)."""
+def secant_polish(g_and_delta, s0: np.ndarray, e0: np.ndarray, damped: bool,
+                  spacing=np.inf):
+    """The roots ``s0`` (eigen-solver's estimate ``e0``; ``spacing`` the distance to the
+    nearest pole of g) polished by the complex secant on ``g_and_delta(s) -> (g, bound
+    of g)``; returns (s, relative error).  Used for one circuit (:func:`_polish`) and for
+    the roots of many designs (:mod:`mechcirc.batch`)."""
 
     def admissible(c):
         if not damped:
             c = 1j * c.imag                       # undamped: roots on the jω axis
         return c, np.isfinite(c)
 
-    return secant_steps(g_and_delta, admissible, s0, e0, 1 if damped else 1j)
+    return secant_steps(g_and_delta, admissible, s0, e0, 1 if damped else 1j,
+                        spacing=spacing)
 
 
 # --------------------------------------------------------------------------
