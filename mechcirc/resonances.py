@@ -33,7 +33,7 @@ last step, including the effect of rounding the element values.
 
 A mode that appears in both problems at the same frequency is not seen from
 the drive (it cancels in K) and is not reported; a close pair that K itself
-shows (a weakly coupled mode, :func:`_pair_seen`) is.  Zero-frequency
+shows (a weakly coupled mode, :func:`_pair_verdict`) is.  Zero-frequency
 (rigid-body) modes are not reported.
 """
 
@@ -233,7 +233,7 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
     M, D, Ks, G_released, G_held, damped = pencil(system, dense=system.size <= nodal.DENSE_LIMIT)
     held, v_held, released, v_released, keep_h, keep_r = _solved(
         M, D, Ks, G_released, G_held, damped, omega_max, vectors,
-        lambda h, r: _pair_seen(system, h, r))
+        lambda h, r: _pair_verdict(system, h, r))
     pairs = []          # ((kind, s, error, must polish), (vector, repeated)) of each root
     for name, found, V, keep in (("resonance", held, v_held, keep_h),
                                  ("antiresonance", released, v_released, keep_r)):
@@ -289,7 +289,7 @@ def check_omega_max(omega_max) -> None:
 
 
 def _solved(M, D, Ks, G_released, G_held, damped: bool, omega_max, vectors: bool,
-            seen=None) -> tuple:
+            verdict=None) -> tuple:
     """``(held, its vectors, released, its vectors, keep held, keep released)``: both
     eigenproblems (:func:`_modes`; LAPACK's failures reported as :class:`SolverError`) and
     which roots survive :func:`_cancel`."""
@@ -299,17 +299,17 @@ def _solved(M, D, Ks, G_released, G_held, damped: bool, omega_max, vectors: bool
         # no massless or rigid direction) the held roots and vectors follow from them.
         if vectors and G_released.size == 0 and v_released is not None and not damped and \
                 v_released.shape[1] == M.shape[0] and \
-                (found := _secular_held(v_released, released, G_held[-1], seen)) is not None:
+                (found := _secular_held(v_released, released, G_held[-1], verdict)) is not None:
             return found[0], found[1], released, v_released, *found[2]
         held, v_held = _modes(M, D, Ks, G_held, damped, omega_max, vectors)
     except np.linalg.LinAlgError as exc:
         # Seen only for values spanning most of float64's range (1e-320 … 1e220).
         raise SolverError(f"resonances: the eigenvalue solver failed ({exc}); element "
                           "values span too many orders of magnitude", status="lapack") from None
-    return held, v_held, released, v_released, *_cancel(held, released, seen)
+    return held, v_held, released, v_released, *_cancel(held, released, verdict)
 
 
-def _secular_held(V, released: np.ndarray, g: np.ndarray, seen=None) -> tuple | None:
+def _secular_held(V, released: np.ndarray, g: np.ndarray, verdict=None) -> tuple | None:
     """``(held, its vectors, (keep held, keep released))`` as :func:`_solved` gives them,
     from the complete released modes ``V`` (M-orthonormal) and roots ``released``; None
     where not confirmed.
@@ -346,7 +346,7 @@ def _secular_held(V, released: np.ndarray, g: np.ndarray, seen=None) -> tuple | 
     # The released roots' estimate eps·λ_max/λ·√n (_undamped_roots) at λ_max, carried to λ.
     err = released[-1, 1].real / w ** 2
     held = np.column_stack([1j * top * w, err, np.full(w.size, released[0, 2])])
-    keep = _cancel(held, released, seen)
+    keep = _cancel(held, released, verdict)
     which = order[keep[0]] - (w.size - len(found))          # among dlasd4's roots
     if np.any(which < 0):
         return None
@@ -858,24 +858,41 @@ def _damped(M, D, K, vectors: bool = False) -> tuple:
     return s, np.where(np.abs(s) <= 1.0, Z[:n], Z[n:] / np.where(s == 0, 1.0, s))
 
 
-def _cancel(held: np.ndarray, released: np.ndarray, seen=None):
+#: Held and released roots closer than this (relative) whose estimates are not bounds
+#: (roots polished on K: a pencil not solved directly, or constraints eliminated with
+#: rounding) are asked of K itself whether they cancel (:func:`_cancel`).
+UNBOUNDED_PAIR = 1e-6
+
+
+def _cancel(held: np.ndarray, released: np.ndarray, verdict=None):
     """Which modes to keep (two masks): not those present in both problems (they
     do not appear in K).
 
-    A held root within 1e3 times the two estimates of a released one is taken for
-    the same mode unless ``seen(s_held, s_released)`` (:func:`_pair_seen`) finds
-    the pair of a weakly coupled mode in K itself."""
+    A held root within its and a released root's estimates of that root is the same
+    mode.  Within 1e3 times the estimates it is too, unless K itself
+    (``verdict(s_held, s_released)``, :func:`_pair_verdict`) shows the pair of a
+    weakly coupled mode.  Farther, it is a distinct root, unless the estimates are no
+    bounds (either root to be polished), the two within :data:`UNBOUNDED_PAIR`, and K
+    shows that they cancel (a mode in both problems whose two eigen-solves differ by
+    more than their estimates)."""
     keep_h, keep_r = np.ones(len(held), bool), np.ones(len(released), bool)
-    for i, (s, err, _) in enumerate(held if len(released) else ()):
+    for i, (s, err, must) in enumerate(held if len(released) else ()):
         d = np.abs(released[:, 0] - s) / abs(s)
         d[~keep_r] = np.inf
         j = int(np.argmin(d))
         # The same sub-network's mode, computed twice, agrees to rounding; distinct
         # modes of long chains can lie within 1e-8 of each other, so use the estimates.
-        if d[j] < 1e3 * (abs(err) + abs(released[j, 1])) and not (
-                seen is not None and d[j] > abs(err) + abs(released[j, 1]) and
-                _alone(s, released[j, 0], held[:, 0], released[:, 0]) and
-                seen(s, released[j, 0])):
+        e = abs(err) + abs(released[j, 1])
+        loose = np.real(must) > 0 or np.real(released[j, 2]) > 0
+        if d[j] <= e:
+            same = True
+        elif d[j] < 1e3 * e or (loose and d[j] < UNBOUNDED_PAIR):
+            said = None if verdict is None or not _alone(
+                s, released[j, 0], held[:, 0], released[:, 0]) else verdict(s, released[j, 0])
+            same = said is False if d[j] >= 1e3 * e else said is not True
+        else:
+            same = False
+        if same:
             keep_h[i] = keep_r[j] = False
     return keep_h, keep_r
 
@@ -886,19 +903,21 @@ def _alone(h: complex, r: complex, held: np.ndarray, released: np.ndarray) -> bo
     return int(near.sum()) == 2
 
 
-def _pair_seen(system, h: complex, r: complex) -> bool:
-    """Whether K of ``system`` has a zero at ``h`` and a pole at ``r`` (a mode the drive
-    sees, weakly), not neither (one mode, unseen, in both problems).
+def _pair_verdict(system, h: complex, r: complex) -> bool | None:
+    """Whether K of ``system`` has a zero at ``h`` and a pole at ``r`` (True: a mode the
+    drive sees, weakly), or neither (False: one mode, unseen, in both problems); None
+    where K cannot tell.
 
     Near the pair K ≈ K₀(s − h)/(s − r), K₀ about constant (:func:`_alone`: no other
     root within 4|h − r|): one step beyond each root, at 2r − h and 2h − r, the
     quotient of K is 2 / ½ = 4 where the pair is in K, 1 where it cancels.  Told
-    apart at 2 when K is known there to 10 % (else: not seen, the pair cancels).
+    apart at 2, when K is known there to 10 %.
     """
     K, dK = nodal.evaluate_complex(system, np.array([2 * r - h, 2 * h - r]))
     with np.errstate(all="ignore"):
-        known = np.all(dK <= 0.1 * np.abs(K))
-        return bool(known and abs(K[0]) > 2 * abs(K[1]))
+        if not np.all(dK <= 0.1 * np.abs(K)):
+            return None
+        return bool(abs(K[0]) > 2 * abs(K[1]))
 
 
 def _make(kind: Kind, s: complex, err: float) -> Resonance:
