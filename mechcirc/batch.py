@@ -48,7 +48,8 @@ from .reduction import evaluate_designs, plan
 from .resonances import (MAX_UNKNOWNS, MAX_UNKNOWNS_DAMPED, POLISH_BELOW, Resonance, batched_roots,
                          constraint_basis, design_values, exact_basis, element_patterns, find_resonances,
                          g_and_bound, held_and_released, pencil, secant_polish, settled,
-                         shared_roots_free, sorted_roots, stacked_problem, template_levers)
+                         shared_roots_free, sorted_roots, stacked_problem, template_levers,
+                         unbounded, design_verdict)
 from .sources import brief, data_frame, summary_repr
 
 __all__ = ["designs", "from_circuits", "network_shape", "Designs", "DesignSweep", "DesignResonances",
@@ -593,7 +594,8 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
         return None
     (s_h, e_h, ok_h, must_h), (s_r, e_r, ok_r, must_r) = roots
     # A mode in both problems cancels in K (resonances._cancel): the single path's.
-    keep = np.flatnonzero(shared_roots_free(((s_h, e_h, ok_h), (s_r, e_r, ok_r)), damped))
+    keep = np.flatnonzero(shared_roots_free(((s_h, e_h, ok_h), (s_r, e_r, ok_r)), damped,
+                                            must_h | must_r, design_verdict(ds, which)))
     if not keep.size:
         return None
     pole, s0, e0 = held_and_released(s_h[keep], s_r[keep], e_h[keep], e_r[keep])
@@ -622,14 +624,8 @@ def _pencil_roots(Z, B: dict, S, damped: bool, omega_max, exact: bool = True):
     if damped:                      # find_resonances polishes every damped root
         return x, e, ok, np.ones(S.shape[0], dtype=bool)
     # _undamped's bound eps·λmax/λ stands (no polishing below POLISH_BELOW)
-    # only for a diagonal mass matrix without massless directions.
-    P = Z.T @ B["mass"] @ Z
-    k = P.shape[1]
-    diagonal = not np.any(P * (1 - np.eye(k)))
-    mass = S @ P[:, np.arange(k), np.arange(k)] if k else np.ones((S.shape[0], 1))
-    must = ~(exact & diagonal &
-             (mass > 1e-13 * mass.max(axis=1, initial=0.0)[:, None]).all(axis=1))
-    return 1j * x, e, ok, must
+    # only for a diagonal mass matrix without massless directions, on an exact basis.
+    return 1j * x, e, ok, unbounded(Z, B, S, exact)
 
 
 def _polish_nodal(stacks: list, design: NDArray, s0: NDArray, pole: NDArray, e0: NDArray,

@@ -1133,7 +1133,10 @@ def batched_roots(ds, omega_max: float | None = None):
              else design_bases(ds, system, G, which) for G in (G_held, G_released)]
     problems = [stacked_problem(Z, B, S, damped, omega_max) for Z, _ in bases]
     (w_h, e_h, _), (w_r, e_r, _) = problems
-    keep = np.flatnonzero(shared_roots_free(problems, damped) & bases[0][1] & bases[1][1])
+    loose = damped or not shared or np.logical_or(*(  # (the estimates are no bounds)
+        unbounded(Z, B, S, exact_basis(G)) for (Z, _), G in zip(bases, (G_held, G_released))))
+    keep = np.flatnonzero(shared_roots_free(problems, damped, loose, design_verdict(
+        ds, which)) & bases[0][1] & bases[1][1])
     if not keep.size:
         return None
     pole, s, err = sorted_roots(*held_and_released(w_h[keep], w_r[keep], e_h[keep], e_r[keep]))
@@ -1162,10 +1165,34 @@ def design_values(ds, system, which: np.ndarray) -> np.ndarray:
     return (ds.values[el][:, which] * ds.eta[el][:, which]).T
 
 
-def shared_roots_free(problems, damped: bool) -> np.ndarray:
+def design_verdict(ds, which: np.ndarray):
+    """``verdict(k, s_held, s_released)``: :func:`_pair_verdict` on the circuit of design
+    ``which[k]`` of ``ds``."""
+    return lambda k, h, r: _pair_verdict(ds.design(int(which[k])).nodal, h, r)
+
+
+def unbounded(Z: np.ndarray, B: dict, S: np.ndarray, exact: bool) -> np.ndarray:
+    """Which designs' undamped roots on the basis ``Z`` (n, k) are polished on K, their
+    eigenvalue estimates no bounds, as :func:`_undamped_roots` and :func:`_modes` decide
+    for one: all but those of a diagonal mass matrix with mass in every direction, on a
+    basis ``exact`` (:func:`exact_basis`).  ``B`` the element patterns, ``S`` the
+    designs' values (D, E)."""
+    P = Z.T @ B["mass"] @ Z
+    k = P.shape[1]
+    diagonal = not np.any(P * (1 - np.eye(k)))
+    mass = S @ P[:, np.arange(k), np.arange(k)] if k else np.ones((S.shape[0], 1))
+    return ~(exact & diagonal & (mass > 1e-13 * mass.max(axis=1, initial=0.0)[:, None])
+             .all(axis=1))
+
+
+def shared_roots_free(problems, damped: bool, loose=True, verdict=None) -> np.ndarray:
     """The designs solved in both stacked problems ((roots, errors, ok) each: held,
     released) with no mode in both (it cancels in K, :func:`_cancel`: left to the single
-    path); undamped roots may be ω or jω alike."""
+    path), nor, where ``loose`` (by design: estimates that are no bounds), a held and a
+    released root within :data:`UNBOUNDED_PAIR` — unless each such pair is alone and
+    ``verdict(design, s_held, s_released)`` (:func:`_pair_verdict` on the design's own
+    circuit) says it is a pair of K, as :func:`_cancel` keeps it; undamped roots may
+    be ω or jω alike."""
     (w_h, e_h, ok_h), (w_r, e_r, ok_r) = problems
     # Damped roots are compared with the eigen-solver's estimates
     # (eps·1e2·|s|max/|s|), as find_resonances compares them before polishing.
@@ -1174,9 +1201,18 @@ def shared_roots_free(problems, damped: bool) -> np.ndarray:
             e_h, e_r = (np.maximum(e, 1e2 * _EPS * np.nanmax(
                 np.abs(x), axis=1, initial=1.0)[:, None] / np.abs(x))
                 for e, x in ((e_h, w_h), (e_r, w_r)))
-        close = np.abs(w_r[:, None, :] - w_h[:, :, None]) / np.abs(w_h[:, :, None]) < \
-            1e3 * (e_h[:, :, None] + e_r[:, None, :])
-    return ok_h & ok_r & ~close.any(axis=(1, 2))
+        d = np.abs(w_r[:, None, :] - w_h[:, :, None]) / np.abs(w_h[:, :, None])
+        same = d < 1e3 * (e_h[:, :, None] + e_r[:, None, :])
+        near = np.asarray(loose, bool).reshape(-1, 1, 1) & (d < UNBOUNDED_PAIR) & ~same
+    free = ok_h & ok_r & ~same.any(axis=(1, 2))
+    ask = free & near.any(axis=(1, 2))
+    free &= ~ask
+    for k in np.flatnonzero(ask) if verdict is not None else ():
+        s_h, s_r = ((x[k] if np.iscomplexobj(x) else 1j * x[k]) for x in (w_h, w_r))
+        roots = (s_h[np.isfinite(s_h)], s_r[np.isfinite(s_r)])     # (NaN: empty slots)
+        free[k] = all(_alone(s_h[i], s_r[j], *roots) and verdict(k, s_h[i], s_r[j]) is True
+                      for i, j in zip(*np.nonzero(near[k])))
+    return free
 
 
 def element_patterns(system) -> dict[str, np.ndarray]:
