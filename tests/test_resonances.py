@@ -240,12 +240,13 @@ def test_close_pair_is_polished_without_stepping_past_its_partner():
         assert r.error <= 1e-13, r
 
 
-def test_roots_of_a_lever_network_are_polished_on_k():
+def test_roots_of_a_lever_network_are_within_their_eigenvalue_bound():
     """Random network 256 of mp_nodal.random_network (seed 2): undamped, a lever of ratio
     305.  Its one root came from the eigen-solve of the pencil projected on the levers'
     constraints with the eigenvalue bound 8.9e-16, unpolished, and was 1.8e-13 off: the
-    elimination's rounding (about the pivot block's condition × eps) is not in that
-    bound.  Lever networks' roots are polished on K now: 2.7e-17 off, error 7.5e-15."""
+    least-squares elimination's error (about the pivot block's condition × eps) is not in
+    that bound.  Refined on double-double residuals, the elimination is correct to about
+    eps and the root is 4.4e-16 off, within its bound."""
     text = """drive V n1 0 velocity=1
 mass e0 n1 0 299.69251034015235
 mass e1 n2 0 0.003581514489040495
