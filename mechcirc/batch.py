@@ -49,7 +49,7 @@ from .resonances import (MAX_UNKNOWNS, MAX_UNKNOWNS_DAMPED, POLISH_BELOW, Resona
                          constraint_basis, design_values, exact_basis, element_patterns, find_resonances,
                          g_and_bound, held_and_released, pencil, secant_polish, settled,
                          shared_roots_free, sorted_roots, stacked_problem, template_levers,
-                         unbounded, design_verdict)
+                         unbounded, design_verdict, row_spacing)
 from .sources import brief, data_frame, summary_repr
 
 __all__ = ["designs", "from_circuits", "network_shape", "Designs", "DesignSweep", "DesignResonances",
@@ -608,7 +608,7 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
         d, r = np.nonzero(todo)
         stacks = [(system, S, parts), (held, *_stacked_matrices(ds, held, which))]
         s[d, r], err[d, r] = _polish_nodal(stacks, keep[d], s0[d, r], pole[d, r], e0[d, r],
-                                           damped)
+                                           damped, row_spacing(s0, pole)[d, r])
     s, err = settled(s, err, damped), np.maximum(err, np.finfo(float).eps)
     if omega_max is not None:
         s = np.where(np.abs(s) <= omega_max, s, np.nan)
@@ -629,7 +629,7 @@ def _pencil_roots(Z, B: dict, S, damped: bool, omega_max, exact: bool = True):
 
 
 def _polish_nodal(stacks: list, design: NDArray, s0: NDArray, pole: NDArray, e0: NDArray,
-                  damped: bool):
+                  damped: bool, spacing=np.inf):
     """:func:`mechcirc.resonances.secant_polish` for roots of many designs: the root ``s0[i]``
     of the design in row ``design[i]`` of the stacks polished by the complex secant on
     its own K(s) (anti-resonances ``pole``: on 1/K = −q of the held system), g and its
@@ -646,7 +646,7 @@ def _polish_nodal(stacks: list, design: NDArray, s0: NDArray, pole: NDArray, e0:
             return K, total_error(sens_data, est + rounding) * np.abs(K)
 
     return secant_polish(lambda x: g_and_bound(pole, lambda i, want: evaluate(x, i, want),
-                                               np.isfinite(x)), s0, e0, damped)
+                                               np.isfinite(x)), s0, e0, damped, spacing)
 
 
 def _stacked_matrices(ds: Designs, system, which: NDArray):

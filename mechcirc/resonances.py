@@ -975,6 +975,21 @@ def _spacing(s: np.ndarray, other: np.ndarray) -> np.ndarray:
     return best
 
 
+def row_spacing(s: np.ndarray, pole: np.ndarray) -> np.ndarray:
+    """:func:`_spacing` for rows of roots (D, R) of many designs: each root's distance to
+    the nearest root of the other kind (``pole``) in its row (NaN: an empty slot)."""
+    D, R = s.shape
+    out = np.full((D, R), np.inf)
+    step = max(1, 2_000_000 // max(R * R, 1))         # (a few MB of distances at a time)
+    for a in range(0, D, step):
+        x, p = s[a:a + step], pole[a:a + step]
+        with np.errstate(invalid="ignore"):
+            dist = np.abs(x[:, :, None] - x[:, None, :])
+        dist = np.where((p[:, :, None] != p[:, None, :]) & np.isfinite(dist), dist, np.inf)
+        out[a:a + step] = dist.min(axis=2, initial=np.inf)
+    return out
+
+
 def _polish(system, roots: list, damped: bool, spacing) -> list[Resonance]:
     """Each root polished on the circuit's own K(s) by a complex secant iteration.
 
@@ -1655,5 +1670,6 @@ def _secant_designs(p, w0: np.ndarray, pole: np.ndarray, e0: np.ndarray):
         return g, dg
 
     w, err = secant_steps(g_and_delta, lambda c: (c, np.isfinite(c) & (c > 0)), w_safe,
-                          np.nan_to_num(e0, nan=0.0), 1, have)
+                          np.nan_to_num(e0, nan=0.0), 1, have,
+                          spacing=row_spacing(w0, pole))
     return np.where(have, w, np.nan), np.where(have, err, np.nan)
