@@ -1205,8 +1205,15 @@ def design_values(ds, system, which: np.ndarray) -> np.ndarray:
 
 def design_verdict(ds, which: np.ndarray):
     """``verdict(k, s_held, s_released)``: :func:`_pair_verdict` on the circuit of design
-    ``which[k]`` of ``ds``."""
-    return lambda k, h, r: _pair_verdict(ds.design(int(which[k])).nodal, h, r)
+    ``which[k]`` of ``ds`` (built once for all its pairs)."""
+    systems: dict = {}
+
+    def verdict(k, h, r):
+        if k not in systems:
+            systems[k] = ds.design(int(which[k])).nodal
+        return _pair_verdict(systems[k], h, r)
+
+    return verdict
 
 
 def unbounded(Z: np.ndarray, B: dict, S: np.ndarray, exact: bool) -> np.ndarray:

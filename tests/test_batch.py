@@ -15,6 +15,7 @@ from mechcirc.errors import InputError, NetlistError, NotSeriesParallelError
 from mechcirc.expressions import evaluate, evaluate_array, parse_expression
 from mechcirc.resonances import find_resonances
 from reference.inputs import STB
+from reference.networks import UNSEEN_MODE_12_DECADES
 
 OMEGA = np.geomspace(10, 1e4, 200)
 
@@ -852,21 +853,8 @@ def test_a_pair_that_k_says_cancels_is_left_to_the_single_path():
     that mode in both problems 1.5e-7 apart (1e8 times its estimates).  Asked of K on
     the design's circuit, the pair cancels: the design goes one by one, where it is
     dropped, and both designs' lists are find_resonances' (two roots each, not four)."""
-    text = """.param p=1
-drive V n1 0 velocity=1
-mass e0 n1 0 {p*4.399311767373876}
-mass e1 n2 n1 0.053308565423130075
-mass e2 n3 n1 481.0732353383091
-mass e3 n4 0 888090.2492139423
-spring e4 n5 n4 0.2645184891415655
-mass e5 n6 n1 417.00468112838615
-mass e6 n7 n1 0.00014618761155269516
-spring e7 n8 n5 101745.71930182866
-mass e8 n1 n8 0.019623490587541627
-spring e9 n7 n1 8144.954288761449
-spring e10 n5 n3 9.170231161902271e-06
-spring e11 0 n7 1.1175355790310573e-05
-"""
+    text = ".param p=1\n" + UNSEEN_MODE_12_DECADES.replace("4.399311767373876",
+                                                         "{p*4.399311767373876}")
     ds = designs(text, {"p": [1.0, 1.5]})
     res = ds.resonances()
     assert res.single.tolist() == [0, 1]

@@ -8,7 +8,7 @@ import pytest
 
 import mechcirc
 from reference import stb_eq7
-from reference.networks import damped_ladder_lines, grid_text
+from reference.networks import UNSEEN_MODE_12_DECADES, damped_ladder_lines, grid_text
 from mechcirc.errors import NetlistError
 from reference.inputs import STB
 
@@ -272,20 +272,7 @@ def test_a_mode_in_both_problems_cancels_where_the_estimates_are_no_bounds():
     Such a pair, within 1e-6, is now asked of K, which says it cancels."""
     from reference import mp_nodal
 
-    text = """drive V n1 0 velocity=1
-mass e0 n1 0 4.399311767373876
-mass e1 n2 n1 0.053308565423130075
-mass e2 n3 n1 481.0732353383091
-mass e3 n4 0 888090.2492139423
-spring e4 n5 n4 0.2645184891415655
-mass e5 n6 n1 417.00468112838615
-mass e6 n7 n1 0.00014618761155269516
-spring e7 n8 n5 101745.71930182866
-mass e8 n1 n8 0.019623490587541627
-spring e9 n7 n1 8144.954288761449
-spring e10 n5 n3 9.170231161902271e-06
-spring e11 0 n7 1.1175355790310573e-05
-"""
+    text = UNSEEN_MODE_12_DECADES
     spec = _spec_of(text)
     found = mechcirc.parse(text).resonances()
     assert [r.kind for r in found] == ["resonance", "antiresonance"]
