@@ -247,6 +247,7 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
             if solve_with.kind == "superlu":
                 _strict_retry(solve_with, kern, omega[sel], r, refined)
             out.store(sel, *r)
+            r = None                # (nor the chunk's x kept while the next one is solved)
         if use_dd:
             out.dd_retry(every, refined)
     return out.K, out.err, out.S, out.Sd, out.x_all, out.kept
@@ -514,13 +515,20 @@ def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
         active = active[est[active] > 16 * eps]
         bound = getattr(solve_fn, "bound", None)
         if step == 0 and bound is not None and active.size:
-            # Or once the error after it is bounded by 16 eps (first_step_bound); every
-            # point still active (as usual): the arrays themselves, not copies.
-            rows: Any = slice(None) if active.size == omega.size else active
+            # Or once the error after it is bounded by 16 eps (first_step_bound).  While
+            # half the points or more are active (as usual), it is formed at every point
+            # from the arrays themselves: copies of the active rows would stack three
+            # (ω, n) arrays on the factors, above glibc's trim threshold (twice the
+            # factors), and every later sweep would fault its scratch in again (45
+            # elements: 259 page faults a sweep, 1.67 against 1.32 ms).
+            whole = 2 * active.size >= omega.size
+            rows: Any = slice(None) if whole else active
             x1 = xh[rows]
             d1 = d[rows]
             first = first_step_bound(system, omega[rows], x1, xl[rows], d1, r[rows],
-                                     bound(x1, d1, active), kern)
+                                     bound(x1, d1, np.arange(omega.size) if whole else active),
+                                     kern)
+            first = first[active] if whole else first
             proven = first <= 16 * eps
             est[active[proven]] = first[proven]
             active = active[~proven]
