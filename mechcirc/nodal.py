@@ -238,7 +238,7 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
     chunk = -(-at.size // -(-at.size // chunk)) if at.size else chunk    # even shares
     use_dd = refine and system.size <= DD_LIMIT and not np.iscomplexobj(omega)
     for start in range(0, at.size, chunk):
-        every = at[start:start + chunk]
+        every, r = at[start:start + chunk], None    # (the last chunk's x freed first)
         good, solve_fn = solve_with.factor(omega[every], kern)
         sel = every[good]
         if sel.size:
@@ -247,7 +247,6 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
             if solve_with.kind == "superlu":
                 _strict_retry(solve_with, kern, omega[sel], r, refined)
             out.store(sel, *r)
-            r = None                # (nor the chunk's x kept while the next one is solved)
         if use_dd:
             out.dd_retry(every, refined)
     return out.K, out.err, out.S, out.Sd, out.x_all, out.kept
