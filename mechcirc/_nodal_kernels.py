@@ -262,13 +262,15 @@ def update(s, d, xl, lo, r, rounding, first):
 
 
 @_jit
-def step_bound(omega, xh, xl, d, rounding, lu, a, b, e_i, e_j, e_abs, s_row, s_col, s_abs, m,
-               out):
-    """:func:`mechcirc._nodal_steps.bound_point` at each ω into ``out``: the sums of
-    :func:`mechcirc.nodal.first_step_bound` by loops (|z| as |re| + |im|; index n, the
-    reference, reads 0: ``a``, ``b`` too), |x|ᵀ|r̂| given (:func:`update`'s)."""
-    c, n = xh.shape
-    for k in range(c):
+def step_bound(rows, omega, xh, xl, d, rounding, lu, a, b, e_i, e_j, e_abs, s_row, s_col,
+               s_abs, m, out):
+    """:func:`mechcirc._nodal_steps.bound_point` at the ω ``rows[q]`` into ``out[q]``: the
+    sums of :func:`mechcirc.nodal.first_step_bound` by loops (|z| as |re| + |im|; index n,
+    the reference, reads 0: ``a``, ``b`` too), |x|ᵀ|r̂| given (:func:`update`'s), each
+    array but ``lu`` (one per q) read at row ``rows[q]``."""
+    n = xh.shape[1]
+    for q in range(rows.size):
+        k = rows[q]
         by_c = by_m = by_k = lever = 0.0
         for e in range(e_i.size):
             i, j = e_i[e], e_j[e]
@@ -281,7 +283,7 @@ def step_bound(omega, xh, xl, d, rounding, lu, a, b, e_i, e_j, e_abs, s_row, s_c
             lever += _l1(_at(xh, k, s_row[s], n)) * _l1(_at(d, k, s_col[s], n)) * s_abs[s]
         K = abs(_dd_difference(_at(xh, k, a, n), _at(xh, k, b, n), _at(xl, k, a, n),
                                _at(xl, k, b, n), True))
-        out[k] = _bound_point(lu[k], rounding[k], by_c, by_m, by_k, lever, abs(omega[k]), K, n, m)
+        out[q] = _bound_point(lu[q], rounding[k], by_c, by_m, by_k, lever, abs(omega[k]), K, n, m)
 
 
 @_jit_inline
@@ -482,12 +484,15 @@ def _l1(z):
 
 @_jit
 def band_bound(F, kl, ipiv, rows, p, x, d, out):
-    """out[k] = |x|ᵀP̃|L||U||d| with the factors ``F[..., rows[k]]`` of :func:`_band_lu` (|z| as
-    |re| + |im|; x and d in A's order, the factors in the order ``p``): what
+    """out[k] = |x|ᵀP̃|L||U||d| at the ω ``rows[k]``, from the factors ``F[..., rows[k]]`` of
+    :func:`_band_lu` and the rows ``x[rows[k]]``, ``d[rows[k]]`` (|z| as |re| + |im|; x and
+    d in A's order, the factors in the order ``p``): what
     :func:`mechcirc._nodal_solvers.band_bound_batch` forms from numpy's factors, for
     :data:`SOLVE_BLOCK` ω at a time, ω innermost (each ω's sums in the same order).  The
-    factors are read through ``rows`` where they are: each once (a copy of a block's, as
-    the solve makes where its ω are not consecutive, cost more than it saved)."""
+    factors, x and d are read through ``rows`` where they are: each once (a copy of a
+    block's, as the solve makes where its ω are not consecutive, cost more than it saved;
+    copies of x's and d's rows stacked (ω, n) arrays on the factors, see
+    :func:`mechcirc.nodal.refine_dd`)."""
     n = F.shape[1]
     kv = 2 * kl
     fr, fi = F[0], F[1]
@@ -499,7 +504,7 @@ def band_bound(F, kl, ipiv, rows, p, x, d, out):
         w = rows[k0:k0 + nb]
         for j in range(n):
             for b in range(nb):
-                ad[j, b] = _l1(d[k0 + b, p[j]])
+                ad[j, b] = _l1(d[w[b], p[j]])
         for i in range(n):                  # |U||d|: U[i, j] is F[:, j, kv + i − j]
             for b in range(nb):             # (loops, not slices: a view costs a reference count)
                 u[i, b] = 0.0
@@ -520,7 +525,7 @@ def band_bound(F, kl, ipiv, rows, p, x, d, out):
             acc[b] = 0.0
         for i in range(n):
             for b in range(nb):
-                acc[b] += _l1(x[k0 + b, p[i]]) * u[i, b]
+                acc[b] += _l1(x[w[b], p[i]]) * u[i, b]
         for b in range(nb):                 # (a loop: a slice assignment compiles numba's
             out[k0 + b] = acc[b]            # shape-mismatch message, 1.5 s of CPU)
 

@@ -388,9 +388,9 @@ def band_bound_batch(G, piv, x, d, n, kl):
 
 
 class _BoundSolve:
-    """A ``solve(r, rows=None)`` of banded factors with their ``bound(x, d, rows)``
-    (:func:`band_bound_batch`, or the compiled ``band_bound``), which
-    :func:`mechcirc.nodal.refine_dd` uses after its first step."""
+    """A ``solve(r, rows=None)`` of banded factors with their ``bound(x, d, rows)`` (x, d of
+    every ω, read at ``rows``: :func:`band_bound_batch`, or the compiled ``band_bound``),
+    which :func:`mechcirc.nodal.refine_dd` uses after its first step."""
 
     def __init__(self, solve, bound):
         self.solve, self.bound = solve, bound
@@ -544,7 +544,8 @@ class SparseSolver:
             return out
 
         def bound(x, d, rows):
-            """|x|ᵀP̃|L||U||d| at ``rows`` (:func:`mechcirc._nodal_kernels.band_bound`)."""
+            """|x|ᵀP̃|L||U||d| at ``rows`` of x, d (every ω's) and the factors
+            (:func:`mechcirc._nodal_kernels.band_bound`)."""
             out = np.empty(rows.size)
             kern.band_bound(F, kl, ipiv, np.asarray(rows, dtype=np.int64), p,
                             np.ascontiguousarray(x, dtype=complex),
@@ -579,8 +580,10 @@ class SparseSolver:
             return out
 
         def bound(x, d, rows):
-            """|x|ᵀP̃|L||U||d| at ``rows`` (:func:`band_bound_batch`)."""
-            return band_bound_batch(G[..., rows], piv[:, rows], x[:, p].T, d[:, p].T, n, kl)
+            """|x|ᵀP̃|L||U||d| at ``rows`` of x, d (every ω's) and the factors
+            (:func:`band_bound_batch`)."""
+            return band_bound_batch(G[..., rows], piv[:, rows], x[rows][:, p].T,
+                                    d[rows][:, p].T, n, kl)
         return good, _BoundSolve(solve, bound)
 
     def _banded_lapack(self, data, good):

@@ -514,20 +514,13 @@ def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
         active = active[est[active] > 16 * eps]
         bound = getattr(solve_fn, "bound", None)
         if step == 0 and bound is not None and active.size:
-            # Or once the error after it is bounded by 16 eps (first_step_bound).  While
-            # half the points or more are active (as usual), it is formed at every point
-            # from the arrays themselves: copies of the active rows would stack three
+            # Or once the error after it is bounded by 16 eps (first_step_bound), at the
+            # active points, their rows read in place: copies of them would stack three
             # (ω, n) arrays on the factors, above glibc's trim threshold (twice the
             # factors), and every later sweep would fault its scratch in again (45
             # elements: 259 page faults a sweep, 1.67 against 1.32 ms).
-            whole = 2 * active.size >= omega.size
-            rows: Any = slice(None) if whole else active
-            x1 = xh[rows]
-            d1 = d[rows]
-            first = first_step_bound(system, omega[rows], x1, xl[rows], d1, r[rows],
-                                     bound(x1, d1, np.arange(omega.size) if whole else active),
-                                     kern)
-            first = first[active] if whole else first
+            first = first_step_bound(system, omega, xh, xl, d, r, bound(xh, d, active),
+                                     kern, rows=active)
             proven = first <= 16 * eps
             est[active[proven]] = first[proven]
             active = active[~proven]
@@ -537,7 +530,8 @@ def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
 
 
 def first_step_bound(system: NodalSystem, omega: NDArray, xh: NDArray, xl: NDArray,
-                     d: NDArray, r: NDArray, lu: NDArray, kern=None) -> NDArray:
+                     d: NDArray, r: NDArray, lu: NDArray, kern=None,
+                     rows: NDArray | None = None) -> NDArray:
     """A bound on the relative error of K at x₁ = xh + xl = x₀ + d after the first
     correction d, without the residual of x₁ (that residual pass is then not taken).
 
@@ -566,22 +560,27 @@ def first_step_bound(system: NodalSystem, omega: NDArray, xh: NDArray, xl: NDArr
         x₁ in double-double.
     d, r : ndarray of complex, shape (c, n)
         The first correction and its residual (with ``kern``: |x₁|ᵀ|r|, shape (c,)).
-    lu : ndarray, shape (c,)
-        |x|ᵀP̃|L||U||d| (:func:`mechcirc._nodal_solvers.band_bound_batch`).
+    lu : ndarray, shape (c,) or (len(rows),)
+        |x|ᵀP̃|L||U||d| (:func:`mechcirc._nodal_solvers.band_bound_batch`), at ``rows``.
     kern : module or None
         The compiled kernels (:func:`kernels`) or None.
+    rows : ndarray of int, optional
+        The bound at these rows of the arrays only (default all), read where they are.
 
     Returns
     -------
-    ndarray, shape (c,)
+    ndarray, shape (c,) or (len(rows),)
     """
     pat = pattern(system)
+    rows = np.arange(omega.size) if rows is None else np.asarray(rows, dtype=np.int64)
     if kern is not None:
-        out = np.empty(omega.size)
-        kern.step_bound(*map(np.ascontiguousarray, (omega, xh, xl, d, r, lu)), *_ends(system),
-                        pat.e_i, pat.e_j, pat.e_abs, pat.s_row, pat.s_col, pat.s_abs,
-                        pat.max_row_terms, out)
+        out = np.empty(rows.size)
+        kern.step_bound(rows, *map(np.ascontiguousarray, (omega, xh, xl, d, r, lu)),
+                        *_ends(system), pat.e_i, pat.e_j, pat.e_abs, pat.s_row, pat.s_col,
+                        pat.s_abs, pat.max_row_terms, out)
         return out
+    if rows.size < omega.size:
+        omega, xh, xl, d, r = omega[rows], xh[rows], xl[rows], d[rows], r[rows]
     with np.errstate(all="ignore"):
         c, n = xh.shape
         zero = np.zeros((c, 1))                 # (the reference's column)

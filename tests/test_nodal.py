@@ -681,6 +681,10 @@ def test_band_bound_is_the_dense_product_of_the_factors(compiled, monkeypatch):
     # Achieved: 2.6e-15 (the factors' own rounding); 1e-12 is far below the
     # bound's slack (1e3x or more).
     assert np.all(np.abs(got / np.array(ref) - 1) <= 1e-12)
+    # At some ω only (refine_dd's active points), x and d read at those rows of every ω's:
+    # each ω's sums are the same operations.
+    some = np.array([1, 4, 6])
+    assert np.array_equal(band.factor(omega, kern)[1].bound(x, d, some), got[some])
 
 
 @pytest.mark.parametrize("kl", [1, 2])
