@@ -26,9 +26,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 from cli_helpers import assert_user_error
+from reference.inputs import STB
 
 REPO = Path(__file__).resolve().parents[1]
-STB = REPO / "netlists" / "stb_heald.mcir"
 
 
 @pytest.mark.parametrize("wave, form", [("harmonic", "harmonic:OMEGA"),

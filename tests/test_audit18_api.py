@@ -3,7 +3,6 @@
 (``True`` was read as 1 rad/s, an empty answer with no word of why); ``periodic`` takes
 ``rpm`` likewise (``True`` ran at 1 rev/min)."""
 
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,8 +10,8 @@ import pytest
 import mechcirc
 from mechcirc.errors import InputError
 from mechcirc.resonances import find_resonances, resonance_pairs
+from reference.inputs import STB
 
-STB = Path(__file__).resolve().parents[1] / "netlists" / "stb_heald.mcir"
 
 
 @pytest.mark.parametrize("bad", [True, False, np.bool_(True)])

@@ -1,12 +1,11 @@
 """A new user's pass over the command line (audit18): every frequency shown in --unit."""
 
 import math
-from pathlib import Path
 
 import pytest
 from cli_helpers import run
+from reference.inputs import STB
 
-STB = Path(__file__).resolve().parents[1] / "netlists" / "stb_heald.mcir"
 
 
 @pytest.mark.parametrize("unit, head", [

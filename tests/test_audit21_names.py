@@ -17,9 +17,9 @@ from mechcirc.modes import sweep_sensitivity
 from mechcirc.motion_laws import cam_cycle
 from mechcirc.scene import parse_scene
 from mechcirc.sley import eigenfrequencies, linearise, preset, to_circuit, to_netlist
+from reference.inputs import STB
 
 REPO = Path(__file__).resolve().parents[1]
-STB = REPO / "netlists" / "stb_heald.mcir"
 QUICK = REPO / "examples" / "quick_return.toml"
 SLIDER = REPO / "examples" / "slider_crank_scene.toml"
 STB_ELEMENTS = "k0, k4, k5, m1, m10, m11, m12, m2, m3, m4, m5, m6, m7, m8, m9"

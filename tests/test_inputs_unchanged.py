@@ -16,10 +16,10 @@ from mechcirc.kinematics import load_linkage
 from mechcirc.periodic import periodic
 from mechcirc.scene.shaft import simulate_shaft
 from mechcirc.transient import crosscheck, transient
+from reference.inputs import STB
 
 ROOT = Path(__file__).resolve().parents[1]
 OMEGA = np.geomspace(10.0, 1e4, 40)
-STB = ROOT / "netlists" / "stb_heald.mcir"
 
 CASES = {
     "sweep": (STB, lambda c: c.sweep(OMEGA)),

@@ -14,9 +14,9 @@ from pathlib import Path
 
 import pytest
 from cli_helpers import assert_user_error
+from reference.inputs import STB
 
 REPO = Path(__file__).resolve().parents[1]
-STB = REPO / "netlists" / "stb_heald.mcir"
 
 
 def test_another_commands_option_names_the_commands_that_take_it(capsys):

@@ -20,9 +20,9 @@ import pytest
 
 import mechcirc
 from mechcirc import _jit, _tree_eval, reduction
+from reference.inputs import STB
 
 ROOT = Path(__file__).resolve().parents[1]
-STB = ROOT / "netlists" / "stb_heald.mcir"
 
 
 def test_a_sweep_with_flags_loads_no_scipy_matplotlib_or_numba(light_imports):
