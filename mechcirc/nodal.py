@@ -535,41 +535,39 @@ def first_step_bound(system: NodalSystem, omega: NDArray, xh: NDArray, xl: NDArr
     """A bound on the relative error of K at x₁ = xh + xl = x₀ + d after the first
     correction d, without the residual of x₁ (that residual pass is then not taken).
 
-    The computed d solves (Â + ΔA) d = r̂ with |ΔA| ≤ γ P̃|L||U| (Higham, Accuracy
-    and Stability of Numerical Algorithms, Thm 9.4: γ₃ₙ for real arithmetic,
-    here 8(n + 2)u ≥ √2·γ₃ₙ₊₆ for complex products; ``lu`` = |x|ᵀP̃|L||U||d|
-    from the factors), where Â is A(ω) rounded to float64: each entry sums at
-    most m stamps (the most of a row) and applies ω, |Â − A| ≤ (m + 4)u Σ|stamp|.
-    So r₁ = b − A x₁ = (r₀ − r̂) + ΔA d + (Â − A) d, and as A is complex symmetric
-    and K = cᵀA⁻¹c, K − K₁ = xᵀr₁: |K − K₁| ≤ γ·lu + u |x|ᵀ|r̂| + (m + 4)u
-    (Σ_e |y_e| (|x_i| + |x_j|)(|d_i| + |d_j|) + Σ_levers |v| |x_r| |d_c|) +
-    |x|ᵀ|r₀ − r̂₀|, the last (the double-double residual's rounding) added to every
-    estimate (:func:`solve`).  |z| is bounded by |re| + |im| and x by x₁ (first
-    order): the sum is doubled.  Asked where the solver has a ``bound``: the banded
-    LUs (:func:`mechcirc._nodal_solvers.band_bound_batch`, and the compiled
+    The computed d solves (Â + ΔA) d = r̂ with |ΔA| ≤ γ P̃|L||U| (Higham, Accuracy and
+    Stability of Numerical Algorithms, Thm 9.4: γ₃ₙ for real arithmetic, here 8(n + 2)u ≥
+    √2·γ₃ₙ₊₆ for complex products; ``lu`` = |x|ᵀP̃|L||U||d| from the factors), where Â is
+    A(ω) rounded to float64: each entry sums at most m stamps (the most of a row) and
+    applies ω, |Â − A| ≤ (m + 4)u Σ|stamp|.  So r₁ = b − A x₁ = (r₀ − r̂) + ΔA d + (Â − A) d,
+    and as A is complex symmetric and K = cᵀA⁻¹c, K − K₁ = xᵀr₁: |K − K₁| ≤ γ·lu +
+    u |x|ᵀ|r̂| + (m + 4)u (Σ_e |y_e| (|x_i| + |x_j|)(|d_i| + |d_j|) + Σ_levers |v| |x_r| |d_c|)
+    + |x|ᵀ|r₀ − r̂₀|, the last (the double-double residual's rounding) added to every
+    estimate (:func:`solve`).  |z| is bounded by |re| + |im| and x by x₁ (first order): the
+    sum is doubled.  Asked where the solver has a ``bound``: the banded LUs
+    (:func:`mechcirc._nodal_solvers.band_bound_batch`, and the compiled
     :func:`mechcirc._nodal_kernels.band_bound`, whose multipliers, an entry times the
-    pivot's reciprocal, carry a few u more than a quotient: within the (3.7n + 7.5)u
-    that 8(n + 2)u leaves above √2·γ₃ₙ₊₆, over 50u from the 12 unknowns of a band on).
+    pivot's reciprocal, carry a few u more than a quotient: within the (3.7n + 7.5)u that
+    8(n + 2)u leaves above √2·γ₃ₙ₊₆, over 50u from the 12 unknowns of a band on).
 
     Parameters
     ----------
     system : NodalSystem
     omega : ndarray
         [rad/s], shape (c,).
-    xh, xl : ndarray of complex, shape (c, n)
-        x₁ in double-double.
-    d, r : ndarray of complex, shape (c, n)
-        The first correction and its residual (with ``kern``: |x₁|ᵀ|r|, shape (c,)).
-    lu : ndarray, shape (c,) or (len(rows),)
-        |x|ᵀP̃|L||U||d| (:func:`mechcirc._nodal_solvers.band_bound_batch`), at ``rows``.
+    xh, xl, d, r : ndarray of complex, shape (c, n)
+        x₁ in double-double, the first correction and its residual (with ``kern``, r is
+        |x₁|ᵀ|r|, shape (c,)).
+    lu : ndarray
+        |x|ᵀP̃|L||U||d| at ``rows`` (:func:`mechcirc._nodal_solvers.band_bound_batch`).
     kern : module or None
         The compiled kernels (:func:`kernels`) or None.
     rows : ndarray of int, optional
-        The bound at these rows of the arrays only (default all), read where they are.
+        The rows asked for (default all), read in place by the kernels.
 
     Returns
     -------
-    ndarray, shape (c,) or (len(rows),)
+    ndarray, shape (len(rows),)
     """
     pat = pattern(system)
     rows = np.arange(omega.size) if rows is None else np.asarray(rows, dtype=np.int64)
@@ -579,8 +577,11 @@ def first_step_bound(system: NodalSystem, omega: NDArray, xh: NDArray, xl: NDArr
                         *_ends(system), pat.e_i, pat.e_j, pat.e_abs, pat.s_row, pat.s_col,
                         pat.s_abs, pat.max_row_terms, out)
         return out
-    if rows.size < omega.size:
-        omega, xh, xl, d, r = omega[rows], xh[rows], xl[rows], d[rows], r[rows]
+    return _step_bound_numpy(system, pat, omega[rows], xh[rows], xl[rows], d[rows], r[rows], lu)
+
+
+def _step_bound_numpy(system, pat, omega, xh, xl, d, r, lu) -> NDArray:
+    """:func:`first_step_bound` in numpy, at every row of the arrays given."""
     with np.errstate(all="ignore"):
         c, n = xh.shape
         zero = np.zeros((c, 1))                 # (the reference's column)
