@@ -508,6 +508,7 @@ def _stacked_solve(system, S: NDArray, parts: list, design: NDArray, w: NDArray)
 
     n, m = system.size, design.size
     pat, rhs = pattern(system), system.injection()
+    _ = pat.slot_plan           # (made once, before the copies below share it)
     K = np.full(m, complex(np.nan, np.nan))
     est, rho = np.full(m, np.inf), np.zeros(m)
     sens, sens_data = np.full(m, np.nan), np.full(m, np.nan)
