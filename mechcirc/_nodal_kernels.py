@@ -177,7 +177,9 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
     at a time: the terms y·(x_i − x_j) formed once for the block (``T``), each row's
     four sums then its residual formed from them.  Each residual, rounded to its real
     parts re and im, is stored as numpy forms ``re + 1j * im``, so a signed zero or a
-    NaN comes out as the numpy code's.
+    NaN comes out as the numpy code's.  ``e_val``, ``e_vh``, ``e_vl`` (an element's
+    value·η split as vh + vl) are (1, n_e), every ω's, or (n_ω, n_e), each ω's own
+    (stacked designs, :func:`mechcirc.batch._stacked_solve`).
     """
     n_w, n = out.shape
     n_e, nb = e_i.size, SOLVE_BLOCK
@@ -187,16 +189,22 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
     acc = np.empty((4, 4, nb))                  # one row's sums by kind
     W = np.ones((3, nb))                        # ω, split
     R = np.empty((2, nb))                     # one row's residuals
+    V = np.empty((3, n_e, nb))                  # the block's element values, split
+    own = e_val.shape[0] > 1
     for k0 in range(0, n_w, nb):
         m = min(nb, n_w - k0)                   # (past m, the last block's stale ω: unused)
         _block_in(omega, xr, xi, xlr, xli, k0, m, W, X)
+        if own or k0 == 0:
+            for e in range(n_e):
+                for b in range(nb):
+                    q = min(k0 + b, n_w - 1) if own else 0
+                    V[0, e, b], V[1, e, b], V[2, e, b] = e_val[q, e], e_vh[q, e], e_vl[q, e]
         for e in range(n_e):
             i, j = e_i[e], e_j[e]
-            v, vh, vl = e_val[e], e_vh[e], e_vl[e]
             for b in range(nb):
                 T[e, 0, b], T[e, 1, b], T[e, 2, b], T[e, 3, b] = _element_term(
-                    v, vh, vl, X[0, i, b], X[1, i, b], X[0, j, b], X[1, j, b], X[2, i, b],
-                    X[3, i, b], X[2, j, b], X[3, j, b], has_lo)
+                    V[0, e, b], V[1, e, b], V[2, e, b], X[0, i, b], X[1, i, b], X[0, j, b],
+                    X[1, j, b], X[2, i, b], X[3, i, b], X[2, j, b], X[3, j, b], has_lo)
         for r in range(n):
             _row_sums(acc, code, start, 4 * r, T, X, has_lo, s_col, s_val, s_vh, s_vl)
             for b in range(nb):

@@ -274,8 +274,10 @@ class Pattern:
         out = np.empty((c, n), dtype=complex)
         kern.residual(np.ascontiguousarray(omega, dtype=float), xh.real, xh.imag, low.real,
                       low.imag, xl is not None, np.asarray(rhs, dtype=float), self.k_bi,
-                      self.k_bj, self.k_bs, self.e_i, self.e_j, self.e_val, self.e_vs[0],
-                      self.e_vs[1], self.s_col, self.s_val, self.s_vs[0], self.s_vs[1], out)
+                      self.k_bj, self.k_bs, self.e_i, self.e_j,
+                      *(np.ascontiguousarray(np.atleast_2d(v))
+                        for v in (self.e_val, *self.e_vs)),
+                      self.s_col, self.s_val, self.s_vs[0], self.s_vs[1], out)
         return out
 
     def sensitivities(self, omega: NDArray, x: NDArray, K: NDArray,

@@ -522,8 +522,11 @@ def _stacked_solve(system, S: NDArray, parts: list, design: NDArray, w: NDArray)
         v.e_vs = (high, low)
         return v
 
-    # Chunks as the single path's (nodal._sweep): the same memory per chunk.
+    # Chunks as the single path's (nodal._sweep): the same memory per chunk.  The compiled
+    # residual (real ω, each point's own element values) gives numpy's bits; the rest of
+    # the refinement stays numpy's, as the single path's dense solve has it.
     chunk = max(1, min(2 ** 21 // (n * n), nodal._CHUNK_TERMS // (pat.n_terms + n)))
+    kern = None if np.iscomplexobj(w) else nodal.kernels(n * m)
     for start in range(0, m, chunk):
         pts = np.arange(start, min(start + chunk, m))
         dc, ms, ks = (X[design[pts]] for X in parts)
@@ -537,8 +540,8 @@ def _stacked_solve(system, S: NDArray, parts: list, design: NDArray, w: NDArray)
                 continue
         xh, xl, est[pts], rho[pts] = nodal.refine_dd(
             lambda r, rows=slice(None), inv=inv: np.einsum("kij,kj->ki", inv[rows], r),
-            lambda p, xh, xl, rhs: at(p).residual(w[p], xh, xl, rhs), pts, rhs, system,
-            True, 4)
+            lambda p, xh, xl, rhs: at(p).residual(w[p], xh, xl, rhs, kern), pts, rhs,
+            system, True, 4)
         K[pts] = nodal.difference_dd(system, xh, xl)
         sens[pts], sens_data[pts] = at(pts).sensitivities(w[pts], xh + xl, K[pts])
     rounding = residual_rounding(system, sens)

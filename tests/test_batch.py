@@ -9,7 +9,7 @@ import mpmath
 import numpy as np
 import pytest
 
-from mechcirc import parse
+from mechcirc import _jit, parse
 from mechcirc.batch import designs
 from mechcirc.errors import InputError, NetlistError, NotSeriesParallelError
 from mechcirc.expressions import evaluate, evaluate_array, parse_expression
@@ -533,7 +533,12 @@ damper d1 e 0 {c}
     # the lever's ratio varies: the designs with the template's r = 2 stacked, the others alone
     ({"r": np.array([2.0, 0.5, 2.0, 3.0]), "k5": np.array([1e3, 1e4, 1e5, 1e6])}, 2),
 ])
-def test_nodal_designs_stacked_are_the_single_nodal_sweep(params, n_single):
+@pytest.mark.parametrize("compiled", [None, True])
+def test_nodal_designs_stacked_are_the_single_nodal_sweep(params, n_single, compiled,
+                                                          monkeypatch):
+    # compiled True: the stacked residual by the compiled kernel, each point's own
+    # element values (the single path's small dense systems keep numpy's).
+    monkeypatch.setattr(_jit, "COMPILED", compiled)
     omega = np.geomspace(10, 1e4, 100)
     ds = designs(BRIDGE, params)
     with pytest.raises(NotSeriesParallelError):
