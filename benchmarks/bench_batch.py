@@ -25,7 +25,9 @@ asserts nothing.  Run from the repository root::
     python benchmarks/bench_batch.py [--big] [--repeats N] [--no-numba] [--nodal | --damped | --levers]
 
 ``--nodal``: instead, a bridge network (not series–parallel: the nodal path)
-over a grid of three parameters, D = 100 and 1,000 designs, 200 ω, K with its
+over a grid of three parameters, D = 100 and 1,000 designs (and 10,000 with
+``--big``: from about 1,700 designs at 200 ω the stacked residual is the
+compiled kernel's, numba installed), 200 ω, K with its
 error bound and flags: ``Designs.sweep`` (the designs' A(ω) stacked, one batched
 inverse per chunk of points) against the same designs one by one through
 ``mechcirc.sweep`` (what ``Designs.sweep`` did before), same run, with the
@@ -170,9 +172,11 @@ damper d1 c 0 {c}
 """
 
 
-def nodal(repeats):
-    """The bridge's designs stacked on the nodal path against one by one (see --nodal)."""
-    for D in (100, 1_000):
+def nodal(repeats, big=False):
+    """The bridge's designs stacked on the nodal path against one by one (see --nodal;
+    with ``--big`` also D = 10,000, where the stacked residual takes the compiled kernel
+    by default)."""
+    for D in (100, 1_000) + ((10_000,) if big else ()):
         n = round(D ** (1 / 3))
         g = np.meshgrid(np.geomspace(1e3, 1e6, n), np.linspace(0.5, 3, n),
                         np.geomspace(1e-2, 50, D // (n * n)))
@@ -322,7 +326,10 @@ def main():
           f"numpy {np.__version__}, scipy {scipy.__version__}, {compiled}; "
           f"load {os.getloadavg()[0]:.2f}")
     if args.nodal or args.damped or args.levers:
-        (nodal if args.nodal else damped_heald if args.damped else levers)(args.repeats)
+        if args.nodal:
+            nodal(args.repeats, args.big)
+        else:
+            (damped_heald if args.damped else levers)(args.repeats)
         print(f"load after: {os.getloadavg()[0]:.2f}")
         return
     rng = np.random.default_rng(21)
