@@ -516,9 +516,10 @@ def _stacked_solve(system, S: NDArray, parts: list, design: NDArray, w: NDArray)
     with np.errstate(all="ignore"):          # the Pattern's element tables, per design
         tables = (S, *split(S), *(np.where(pat.e_kind == i, S, 0.0) for i in range(3)))
 
-    def at(p):                               # the pattern at the values of points p
-        v = copy(pat)
-        v.e_val, high, low, v.e_m, v.e_k, v.e_c = (t[design[p]] for t in tables)
+    def at(local, p):                        # the pattern at the values of points p
+        v = copy(pat)                        # (of a chunk's ``local`` tables: all, or some)
+        whole = p.size == local[0].shape[0]
+        v.e_val, high, low, v.e_m, v.e_k, v.e_c = (t if whole else t[p] for t in local)
         v.e_vs = (high, low)
         return v
 
@@ -538,12 +539,14 @@ def _stacked_solve(system, S: NDArray, parts: list, design: NDArray, w: NDArray)
             pts, inv = pts[good], inv[good]
             if not pts.size:
                 continue
+        # The chunk's tables once; the refinement's points by their place in the chunk.
+        local, wl, every = [t[design[pts]] for t in tables], w[pts], np.arange(pts.size)
         xh, xl, est[pts], rho[pts] = nodal.refine_dd(
             lambda r, rows=slice(None), inv=inv: np.einsum("kij,kj->ki", inv[rows], r),
-            lambda p, xh, xl, rhs: at(p).residual(w[p], xh, xl, rhs, kern), pts, rhs,
-            system, True, 4)
+            lambda p, xh, xl, rhs, local=local, wl=wl: at(local, p).residual(
+                wl[p], xh, xl, rhs, kern), every, rhs, system, True, 4)
         K[pts] = nodal.difference_dd(system, xh, xl)
-        sens[pts], sens_data[pts] = at(pts).sensitivities(w[pts], xh + xl, K[pts])
+        sens[pts], sens_data[pts] = at(local, every).sensitivities(wl, xh + xl, K[pts])
     rounding = residual_rounding(system, sens)
     return K, np.where((rho >= 0.5) & (est > 16 * rounding), np.inf, est), rounding, sens_data
 
