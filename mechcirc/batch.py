@@ -499,8 +499,6 @@ def _stacked_solve(system, S: NDArray, parts: list, design: NDArray, w: NDArray)
     infinite where the refinement did not contract and it exceeds 16 roundings); K
     NaN where A is exactly singular.
     """
-    from copy import copy
-
     from . import nodal
     from ._dd import split
     from ._nodal_residual import pattern, residual_rounding
@@ -515,13 +513,6 @@ def _stacked_solve(system, S: NDArray, parts: list, design: NDArray, w: NDArray)
 
     with np.errstate(all="ignore"):          # the Pattern's element tables, per design
         tables = (S, *split(S), *(np.where(pat.e_kind == i, S, 0.0) for i in range(3)))
-
-    def at(local, p):                        # the pattern at the values of points p
-        v = copy(pat)                        # (of a chunk's ``local`` tables: all, or some)
-        whole = p.size == local[0].shape[0]
-        v.e_val, high, low, v.e_m, v.e_k, v.e_c = (t if whole else t[p] for t in local)
-        v.e_vs = (high, low)
-        return v
 
     # Chunks as the single path's (nodal._sweep): the same memory per chunk.  The compiled
     # residual (real ω, each point's own element values) gives numpy's bits; the rest of
@@ -543,12 +534,25 @@ def _stacked_solve(system, S: NDArray, parts: list, design: NDArray, w: NDArray)
         local, wl, every = [t[design[pts]] for t in tables], w[pts], np.arange(pts.size)
         xh, xl, est[pts], rho[pts] = nodal.refine_dd(
             lambda r, rows=slice(None), inv=inv: np.einsum("kij,kj->ki", inv[rows], r),
-            lambda p, xh, xl, rhs, local=local, wl=wl: at(local, p).residual(
+            lambda p, xh, xl, rhs, local=local, wl=wl: _values_at(pat, local, p).residual(
                 wl[p], xh, xl, rhs, kern), every, rhs, system, True, 4)
         K[pts] = nodal.difference_dd(system, xh, xl)
-        sens[pts], sens_data[pts] = at(local, every).sensitivities(wl, xh + xl, K[pts])
+        sens[pts], sens_data[pts] = _values_at(pat, local, every).sensitivities(
+            wl, xh + xl, K[pts])
     rounding = residual_rounding(system, sens)
     return K, np.where((rho >= 0.5) & (est > 16 * rounding), np.inf, est), rounding, sens_data
+
+
+def _values_at(pat, local: list, p: NDArray):
+    """A copy of the pattern ``pat`` at the element values of points ``p`` of a chunk whose
+    tables (value·η, its two halves, by kind) are ``local``: all of them without a copy."""
+    from copy import copy
+
+    v = copy(pat)
+    whole = p.size == local[0].shape[0]
+    v.e_val, high, low, v.e_m, v.e_k, v.e_c = (t if whole else t[p] for t in local)
+    v.e_vs = (high, low)
+    return v
 
 
 def _nodal_roots(ds: Designs, omega_max):
