@@ -577,7 +577,8 @@ def first_step_bound(system: NodalSystem, omega: NDArray, xh: NDArray, xl: NDArr
                         *_ends(system), pat.e_i, pat.e_j, pat.e_abs, pat.s_row, pat.s_col,
                         pat.s_abs, pat.max_row_terms, out)
         return out
-    return _step_bound_numpy(system, pat, omega[rows], xh[rows], xl[rows], d[rows], r[rows], lu)
+    at: Any = slice(None) if rows.size == omega.size else rows      # (no copies of all)
+    return _step_bound_numpy(system, pat, omega[at], xh[at], xl[at], d[at], r[at], lu)
 
 
 def _step_bound_numpy(system, pat, omega, xh, xl, d, r, lu) -> NDArray:
