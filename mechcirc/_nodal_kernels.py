@@ -132,10 +132,11 @@ def _bucket_plan(b_i, b_j, b_s, n_buckets):
 
 
 @_jit_inline
-def _row_sums(acc, code, start, bk, T, X, has_lo, s_col, s_val, s_vh, s_vl):
+def _row_sums(acc, code, start, bk, T, X, has_lo, s_col, SV):
     """The four sums by kind of the row of buckets ``bk`` … ``bk + 3`` into ``acc`` (re_hi,
     re_lo, im_hi, im_lo by kind) from their terms (:func:`_bucket_plan`): +T[e], −T[e]
-    (code n_e + e) and lever stamps (2·n_e + s), each added by TwoSum in order."""
+    (code n_e + e) and lever stamps (2·n_e + s, the block's values and their halves in
+    ``SV``), each added by TwoSum in order."""
     n_e, nb = T.shape[0], SOLVE_BLOCK
     acc[:] = 0.0
     for kind in range(4):
@@ -150,14 +151,28 @@ def _row_sums(acc, code, start, bk, T, X, has_lo, s_col, s_val, s_vh, s_vl):
                     _add(acc, kind, b, -T[e, 0, b], -T[e, 1, b], -T[e, 2, b], -T[e, 3, b])
             else:
                 s = e - 2 * n_e
-                c, v, vh, vl = s_col[s], s_val[s], s_vh[s], s_vl[s]
+                c = s_col[s]
                 for b in range(nb):
+                    v, vh, vl = SV[0, s, b], SV[1, s, b], SV[2, s, b]
                     th_r, tl_r = _two_prod(v, vh, vl, X[0, c, b])
                     th_i, tl_i = _two_prod(v, vh, vl, X[1, c, b])
                     if has_lo:
                         tl_r = tl_r + v * X[2, c, b]
                         tl_i = tl_i + v * X[3, c, b]
                     _add(acc, kind, b, th_r, tl_r, th_i, tl_i)
+
+
+@_jit_inline
+def _block_values(val, vh, vl, k0, n_w, V):
+    """The values (and their halves) of ω ``k0`` … of a block into ``V`` (3, n, block): each
+    ω's own row of the (n_ω, n) tables, or the one row of (1, n) ones (written once, at
+    the first block)."""
+    own = val.shape[0] > 1
+    if own or k0 == 0:
+        for e in range(val.shape[1]):
+            for b in range(V.shape[2]):
+                q = min(k0 + b, n_w - 1) if own else 0
+                V[0, e, b], V[1, e, b], V[2, e, b] = val[q, e], vh[q, e], vl[q, e]
 
 
 @_jit
@@ -178,8 +193,9 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
     four sums then its residual formed from them.  Each residual, rounded to its real
     parts re and im, is stored as numpy forms ``re + 1j * im``, so a signed zero or a
     NaN comes out as the numpy code's.  ``e_val``, ``e_vh``, ``e_vl`` (an element's
-    value·η split as vh + vl) are (1, n_e), every ω's, or (n_ω, n_e), each ω's own
-    (stacked designs, :func:`mechcirc.batch._stacked_solve`).
+    value·η split as vh + vl), and ``s_val``, ``s_vh``, ``s_vl`` (a lever stamp's value
+    likewise) are (1, n) tables, every ω's, or (n_ω, n), each ω's own (stacked designs,
+    :func:`mechcirc.batch._stacked_solve`).
     """
     n_w, n = out.shape
     n_e, nb = e_i.size, SOLVE_BLOCK
@@ -190,15 +206,12 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
     W = np.ones((3, nb))                        # ω, split
     R = np.empty((2, nb))                     # one row's residuals
     V = np.empty((3, n_e, nb))                  # the block's element values, split
-    own = e_val.shape[0] > 1
+    SV = np.empty((3, s_col.size, nb))          # and its lever stamps' values
     for k0 in range(0, n_w, nb):
         m = min(nb, n_w - k0)                   # (past m, the last block's stale ω: unused)
         _block_in(omega, xr, xi, xlr, xli, k0, m, W, X)
-        if own or k0 == 0:
-            for e in range(n_e):
-                for b in range(nb):
-                    q = min(k0 + b, n_w - 1) if own else 0
-                    V[0, e, b], V[1, e, b], V[2, e, b] = e_val[q, e], e_vh[q, e], e_vl[q, e]
+        _block_values(e_val, e_vh, e_vl, k0, n_w, V)
+        _block_values(s_val, s_vh, s_vl, k0, n_w, SV)
         for e in range(n_e):
             i, j = e_i[e], e_j[e]
             for b in range(nb):
@@ -206,7 +219,7 @@ def residual(omega, xr, xi, xlr, xli, has_lo, rhs, b_i, b_j, b_s,
                     V[0, e, b], V[1, e, b], V[2, e, b], X[0, i, b], X[1, i, b], X[0, j, b],
                     X[1, j, b], X[2, i, b], X[3, i, b], X[2, j, b], X[3, j, b], has_lo)
         for r in range(n):
-            _row_sums(acc, code, start, 4 * r, T, X, has_lo, s_col, s_val, s_vh, s_vl)
+            _row_sums(acc, code, start, 4 * r, T, X, has_lo, s_col, SV)
             for b in range(nb):
                 R[0, b], R[1, b] = _row_residual(acc, 0, b, W[0, b], W[1, b], W[2, b], rhs[r])
             for b in range(m):

@@ -276,8 +276,9 @@ class Pattern:
                       low.imag, xl is not None, np.asarray(rhs, dtype=float), self.k_bi,
                       self.k_bj, self.k_bs, self.e_i, self.e_j,
                       *(np.ascontiguousarray(np.atleast_2d(v))
-                        for v in (self.e_val, *self.e_vs)),
-                      self.s_col, self.s_val, self.s_vs[0], self.s_vs[1], out)
+                        for v in (self.e_val, *self.e_vs)), self.s_col,
+                      *(np.ascontiguousarray(np.atleast_2d(v))
+                        for v in (self.s_val, *self.s_vs)), out)
         return out
 
     def sensitivities(self, omega: NDArray, x: NDArray, K: NDArray,
@@ -327,9 +328,10 @@ class Pattern:
             ai, aj = ax[:, self.e_i], ax[:, self.e_j]
             d = np.abs(xe[:, self.e_i] - xe[:, self.e_j])
             S = np.einsum("ij,ij->i", y, (ai + aj) * d)
-            if self.s_row.size:
-                S = S + np.abs(self.s_val) @ (ax[:, self.s_row] * ax[:, self.s_col]).T \
-                    if c else S
+            if self.s_row.size and c:       # (each point's own lever values: a row each)
+                t = ax[:, self.s_row] * ax[:, self.s_col]
+                S = S + (np.abs(self.s_val) @ t.T if self.s_val.ndim == 1 else
+                         np.einsum("ij,ij->i", np.abs(self.s_val), t))
             f = scale / np.abs(K)
             if not data:
                 return S * f * scale, None

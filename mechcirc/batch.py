@@ -453,8 +453,8 @@ def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
     refined by :func:`mechcirc.nodal.refine_dd` with the residual and sensitivities
     of :class:`~mechcirc._nodal_residual.Pattern` at the design's values.
 
-    Only small systems (the single path's dense solver), ω > 0 and the template's
-    lever ratios; a design with a point the single path would treat further (no
+    Only small systems (the single path's dense solver) and ω > 0 (each design with its
+    own lever ratios); a design with a point the single path would treat further (no
     contracting refinement: the double-double LU; a singular point) is left out.
     Returns ``(designs solved, K, error)``, shapes (D',), (D', W), (D', W).
     """
@@ -465,7 +465,6 @@ def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
         system = ds.circuit.nodal
     except MechcircError:                    # each design alone says what is wrong
         return none
-    which = template_levers(ds, system, which)
     n, W = system.size, omega.size
     if solver(system).kind != "dense" or not which.size or not (omega > 0).all():
         return none
@@ -473,9 +472,9 @@ def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
     if which.size > group:
         out = [_nodal_sweep(ds, which[i:i + group], omega) for i in range(0, which.size, group)]
         return tuple(np.concatenate(x) for x in zip(*out))
-    S, parts = _stacked_matrices(ds, system, which)
+    S, parts, levers = _stacked_matrices(ds, system, which)
     design, w = np.repeat(np.arange(which.size), W), np.tile(omega, which.size)
-    K, e, rounding, _ = _stacked_solve(system, S, parts, design, w)
+    K, e, rounding, _ = _stacked_solve(system, S, parts, design, w, levers)
     eps = np.finfo(float).eps
     with np.errstate(invalid="ignore"):
         done = (e <= np.maximum(16 * eps, 16 * rounding)) & np.isfinite(K)
@@ -486,11 +485,11 @@ def _nodal_sweep(ds: Designs, which: NDArray, omega: NDArray):
     return which[ok], K[ok], err[ok]
 
 
-def _stacked_solve(system, S: NDArray, parts: list, design: NDArray, w: NDArray):
+def _stacked_solve(system, S: NDArray, parts: list, design: NDArray, w: NDArray, levers):
     """The refined nodal solve of :func:`mechcirc.nodal.solve` at points (design, ω) of
-    stacked designs: ``S`` and ``parts`` from :func:`_stacked_matrices`, ``design[i]``
-    the row of point i in them, ``w[i]`` its ω (real, or complex: ω = −js for the
-    resonances' polishing).  One batched inverse per chunk, each solution refined by
+    stacked designs: ``S``, ``parts`` and ``levers`` from :func:`_stacked_matrices`,
+    ``design[i]`` the row of point i in them, ``w[i]`` its ω (real, or complex: ω = −js
+    for the resonances' polishing).  One batched inverse per chunk, each solution refined by
     :func:`mechcirc.nodal.refine_dd` with the residual and sensitivities of
     :class:`~mechcirc._nodal_residual.Pattern` at the design's values.
 
@@ -511,8 +510,9 @@ def _stacked_solve(system, S: NDArray, parts: list, design: NDArray, w: NDArray)
     est, rho = np.full(m, np.inf), np.zeros(m)
     sens, sens_data = np.full(m, np.nan), np.full(m, np.nan)
 
-    with np.errstate(all="ignore"):          # the Pattern's element tables, per design
-        tables = (S, *split(S), *(np.where(pat.e_kind == i, S, 0.0) for i in range(3)))
+    with np.errstate(all="ignore"):          # the Pattern's element and lever tables
+        tables = (S, *split(S), *(np.where(pat.e_kind == i, S, 0.0) for i in range(3)),
+                  levers[0], *split(levers[0]), levers[1])
 
     # Chunks as the single path's (nodal._sweep): the same memory per chunk.  The compiled
     # residual (real ω, each point's own element values) gives numpy's bits; the rest of
@@ -544,14 +544,16 @@ def _stacked_solve(system, S: NDArray, parts: list, design: NDArray, w: NDArray)
 
 
 def _values_at(pat, local: list, p: NDArray):
-    """A copy of the pattern ``pat`` at the element values of points ``p`` of a chunk whose
-    tables (value·η, its two halves, by kind) are ``local``: all of them without a copy."""
+    """A copy of the pattern ``pat`` at the values of points ``p`` of a chunk whose tables
+    are ``local`` (:func:`_stacked_solve`'s: value·η, its two halves, by kind; each lever
+    stamp's value, its two halves; each lever's |ratio|): all of them without a copy."""
     from copy import copy
 
     v = copy(pat)
     whole = p.size == local[0].shape[0]
-    v.e_val, high, low, v.e_m, v.e_k, v.e_c = (t if whole else t[p] for t in local)
-    v.e_vs = (high, low)
+    (v.e_val, high, low, v.e_m, v.e_k, v.e_c, v.s_val, s_high, s_low,
+     v.l_r) = (t if whole else t[p] for t in local)
+    v.e_vs, v.s_vs = (high, low), (s_high, s_low)
     return v
 
 
@@ -598,7 +600,7 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
     """:func:`_nodal_roots` for one group of designs ``which``."""
     *_, G_released, G_held, damped = pencil(system)
     B, nn = element_patterns(system), len(system.nodes)
-    S, parts = _stacked_matrices(ds, system, which)
+    S, parts, levers = _stacked_matrices(ds, system, which)
     roots = [_pencil_roots(constraint_basis(G, nn).toarray(), B, S, damped, omega_max,
                            exact_basis(G)) for G in (G_held, G_released)]
     if None in roots:
@@ -617,7 +619,7 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
     s, err = s0.copy(), e0.copy()
     if todo.any():
         d, r = np.nonzero(todo)
-        stacks = [(system, S, parts), (held, *_stacked_matrices(ds, held, which))]
+        stacks = [(system, S, parts, levers), (held, *_stacked_matrices(ds, held, which))]
         s[d, r], err[d, r] = _polish_nodal(stacks, keep[d], s0[d, r], pole[d, r], e0[d, r],
                                            damped, row_spacing(s0, pole)[d, r])
     s, err = settled(s, err, damped), np.maximum(err, np.finfo(float).eps)
@@ -645,14 +647,15 @@ def _polish_nodal(stacks: list, design: NDArray, s0: NDArray, pole: NDArray, e0:
     of the design in row ``design[i]`` of the stacks polished by the complex secant on
     its own K(s) (anti-resonances ``pole``: on 1/K = −q of the held system), g and its
     bound by :func:`mechcirc.resonances.g_and_bound`, from :func:`_stacked_solve` at
-    every root at once.  ``stacks``: ``(system, S, parts)`` of the network and of
+    every root at once.  ``stacks``: ``(system, S, parts, levers)`` of the network and of
     its drive-held system (:func:`_stacked_matrices`).  Returns ``(s, relative error)``.
     """
     from ._nodal_residual import total_error
 
     def evaluate(x, i, want):
-        sys_, S, parts = stacks[i]
-        K, est, rounding, sens_data = _stacked_solve(sys_, S, parts, design[want], -1j * x[want])
+        sys_, S, parts, levers = stacks[i]
+        K, est, rounding, sens_data = _stacked_solve(sys_, S, parts, design[want], -1j * x[want],
+                                                     levers)
         with np.errstate(all="ignore"):
             return K, total_error(sens_data, est + rounding) * np.abs(K)
 
@@ -661,8 +664,10 @@ def _polish_nodal(stacks: list, design: NDArray, s0: NDArray, pole: NDArray, e0:
 
 
 def _stacked_matrices(ds: Designs, system, which: NDArray):
-    """The value·η of the nodal system's elements in designs ``which`` (D', E), and their
-    D + C, M and Kₛ as dense stacks (D', n, n), from the element stamp patterns."""
+    """The value·η of the nodal system's elements in designs ``which`` (D', E), their
+    D + C, M and Kₛ as dense stacks (D', n, n) from the element stamp patterns, and the
+    designs' levers ``(value of each lever stamp (D', stamps), |ratio| of each lever
+    (D', levers))`` from which their C is stamped."""
     S = design_values(ds, system, which)
     B, n, nn = element_patterns(system), system.size, len(system.nodes)
     parts = []
@@ -670,8 +675,27 @@ def _stacked_matrices(ds: Designs, system, which: NDArray):
         X = np.zeros((which.size, n, n))
         X[:, :nn, :nn] = (S @ B[kind].reshape(S.shape[1], -1)).reshape(-1, nn, nn)
         parts.append(X)
-    parts[0] += system.C.toarray()
-    return S, parts
+    levers = _lever_values(ds, system, which)
+    for t, (r, c) in enumerate(zip(*system.stamps["lever"][:2])):    # (a few stamps)
+        parts[0][:, r, c] += levers[0][:, t]
+    return S, parts, levers
+
+
+def _lever_values(ds: Designs, system, which: NDArray) -> tuple[NDArray, NDArray]:
+    """The value of each of ``system``'s lever stamps in designs ``which``, (D', stamps):
+    ±ratio on a lever's primary side with the design's ratio, else the system's own
+    (±1, and a held drive's constraint); and each lever's |ratio|, (D', levers)."""
+    from . import nodal
+
+    index = {name: i for i, name in enumerate(system.nodes)}
+    row = {lv.name: i for i, lv in enumerate(ds.circuit.levers)}
+    ratios = ds.ratios[[row[lv.name] for lv in system.levers]][:, which].T     # (D', L)
+    values = np.repeat(np.asarray(system.stamps["lever"][2], dtype=float)[None], which.size, 0)
+    pos = {lv.name: k for k, lv in enumerate(system.levers)}
+    for t, (_, _, _, sign, lever, ratio) in enumerate(nodal.stamps((), system.levers, index)):
+        if ratio:
+            values[:, t] = sign * ratios[:, pos[lever.name]]
+    return values, np.abs(ratios)
 
 
 def _alone(ds: Designs, which: NDArray, compute) -> tuple[dict, dict[int, str]]:
