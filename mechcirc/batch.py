@@ -49,7 +49,7 @@ from .resonances import (MAX_UNKNOWNS, MAX_UNKNOWNS_DAMPED, POLISH_BELOW, Resona
                          constraint_basis, design_values, exact_basis, element_patterns, find_resonances,
                          g_and_bound, held_and_released, pencil, secant_polish, settled,
                          shared_roots_free, sorted_roots, stacked_problem, template_levers,
-                         unbounded, design_verdict, row_spacing)
+                         unbounded, design_bases, design_verdict, row_spacing)
 from .sources import brief, data_frame, summary_repr
 
 __all__ = ["designs", "from_circuits", "network_shape", "Designs", "DesignSweep", "DesignResonances",
@@ -559,7 +559,7 @@ def _values_at(pat, local: list, p: NDArray):
 
 def _nodal_roots(ds: Designs, omega_max):
     """:func:`mechcirc.resonances.batched_roots` for a network that is not
-    series–parallel: the roots of the valid designs with the template's lever ratios,
+    series–parallel: the roots of the valid designs (each with its own lever ratios),
     stacked in groups of :data:`_STACK_ENTRIES`; None when it solves none.
 
     Each group: the stacked eigenproblems of :func:`~mechcirc.resonances.stacked_problem`
@@ -579,11 +579,15 @@ def _nodal_roots(ds: Designs, omega_max):
             held = nodal.held(system)
     except MechcircError:                    # each design alone says what is wrong
         return None
-    which = template_levers(ds, system, np.flatnonzero(ds.valid))
+    which = np.flatnonzero(ds.valid)
     if not which.size or held.size > DENSE_LIMIT:
         return None
     group = max(1, _STACK_ENTRIES // (held.size * held.size))
-    found = [f for f in (_nodal_group_roots(ds, system, held, which[i:i + group], omega_max)
+    # One basis for all when every lever ratio is the template's, else one per design
+    # (decided for all the designs: the groups then give what one group gives).
+    shared = template_levers(ds, system, which).size == which.size
+    found = [f for f in (_nodal_group_roots(ds, system, held, which[i:i + group], omega_max,
+                                            shared)
                          for i in range(0, which.size, group)) if f is not None]
     if not found:
         return None
@@ -596,16 +600,18 @@ def _nodal_roots(ds: Designs, omega_max):
             pad(2, complex(np.nan, np.nan)), pad(3, np.nan))
 
 
-def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
-    """:func:`_nodal_roots` for one group of designs ``which``."""
+def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max, shared: bool):
+    """:func:`_nodal_roots` for one group of designs ``which`` (``shared``: one constraint
+    basis for all, :func:`_group_basis`)."""
     *_, G_released, G_held, damped = pencil(system)
-    B, nn = element_patterns(system), len(system.nodes)
+    B = element_patterns(system)
     S, parts, levers = _stacked_matrices(ds, system, which)
-    roots = [_pencil_roots(constraint_basis(G, nn).toarray(), B, S, damped, omega_max,
-                           exact_basis(G)) for G in (G_held, G_released)]
+    bases = [_group_basis(ds, system, G, which, shared) for G in (G_held, G_released)]
+    roots = [_pencil_roots(Z, B, S, damped, omega_max, exact) for Z, exact, _ in bases]
     if None in roots:
         return None
     (s_h, e_h, ok_h, must_h), (s_r, e_r, ok_r, must_r) = roots
+    ok_h, ok_r = ok_h & bases[0][2], ok_r & bases[1][2]
     # A mode in both problems cancels in K (resonances._cancel): the single path's.
     keep = np.flatnonzero(shared_roots_free(((s_h, e_h, ok_h), (s_r, e_r, ok_r)), damped,
                                             must_h | must_r, design_verdict(ds, which)))
@@ -628,17 +634,30 @@ def _nodal_group_roots(ds: Designs, system, held, which: NDArray, omega_max):
     return (which[keep], *sorted_roots(pole, s, err))
 
 
+def _group_basis(ds: Designs, system, G, which: NDArray, shared: bool):
+    """``(Z, exact, ok)``: the basis of the constraint rows ``G`` for designs ``which``,
+    the template's (n, k) where their lever ratios are ``shared`` (``exact``: see
+    :func:`mechcirc.resonances.exact_basis`), else one per design (D', n, k) by
+    :func:`mechcirc.resonances.design_bases`, ``ok`` false where a design's pivots are
+    ill-conditioned (the single path takes it)."""
+    if shared:
+        return constraint_basis(G, len(system.nodes)).toarray(), exact_basis(G), True
+    Z, ok = design_bases(ds, system, G, which)
+    return Z, False, ok
+
+
 def _pencil_roots(Z, B: dict, S, damped: bool, omega_max, exact: bool = True):
-    """``(roots, errors, ok, must polish)`` on basis ``Z`` (``exact``: see
-    :func:`mechcirc.resonances.exact_basis`); None: too big."""
-    if Z.shape[1] > (MAX_UNKNOWNS_DAMPED if damped else MAX_UNKNOWNS):
+    """``(roots, errors, ok, must polish)`` on basis ``Z``, one for all (n, k) or one per
+    design (D, n, k) (``exact``: see :func:`mechcirc.resonances.exact_basis`); None: too big."""
+    if Z.shape[-1] > (MAX_UNKNOWNS_DAMPED if damped else MAX_UNKNOWNS):
         return None
     x, e, ok = stacked_problem(Z, B, S, damped, omega_max)
     if damped:                      # find_resonances polishes every damped root
         return x, e, ok, np.ones(S.shape[0], dtype=bool)
     # _undamped's bound eps·λmax/λ stands (no polishing below POLISH_BELOW)
     # only for a diagonal mass matrix without massless directions, on an exact basis.
-    return 1j * x, e, ok, unbounded(Z, B, S, exact)
+    return 1j * x, e, ok, (unbounded(Z, B, S, exact) if Z.ndim == 2 else   # a design's
+                           np.ones(S.shape[0], dtype=bool))      # own basis: no bound
 
 
 def _polish_nodal(stacks: list, design: NDArray, s0: NDArray, pole: NDArray, e0: NDArray,

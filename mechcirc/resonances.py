@@ -1313,9 +1313,10 @@ def design_bases(ds, system, G: np.ndarray, which: np.ndarray) -> tuple:
     ``G``'s lever rows (the first ``len(system.levers)``, :func:`pencil`) stamped with
     each design's ratios, and every design's unknowns eliminated at the pivots the
     template's pivoted QR chooses (:func:`_pivots`, as :func:`constraint_basis`),
-    v_p = −G_p⁺ G_f v_f.
+    v_p = −G_p⁺ G_f v_f, its columns then made orthonormal.
     Returns ``(Z, ok)``: ``ok`` false where those pivots are ill-conditioned for the
-    design (G_p's singular values more than 1e8 apart), which the single path takes."""
+    design (G_p's singular values more than 1e8 apart) or its constraints have a rank
+    the template's have not, which the single path takes."""
     n, L = G.shape[1], len(system.levers)
     index = {name: i for i, name in enumerate(system.nodes)}
     lev = {lv.name: i for i, lv in enumerate(ds.circuit.levers)}
@@ -1332,6 +1333,17 @@ def design_bases(ds, system, G: np.ndarray, which: np.ndarray) -> tuple:
     Z = np.zeros((which.size, n, free.size))
     Z[:, free, np.arange(free.size)] = 1.0
     Z[:, pivots, :] = -np.linalg.pinv(Gp, rcond=_EPS) @ Gf
+    # Orthonormal columns (the same span): the template's pivots can scale a design's
+    # basis badly (a ratio of 0.0075 where the template's is 1: entries of 556), and the
+    # massless directions are judged on ZᵀMZ (stacked_problem), whose spread that
+    # scaling widens by its square (7e-11 there: a direction with mass taken as massless,
+    # roots 3e-5 off and one lost, with estimates of 1e-15).
+    Z = np.linalg.qr(Z)[0]
+    # A design whose constraints have a rank the template's have not (two levers that
+    # coincide at the template's ratios, r₁r₂ = 1, and not at the design's): its basis
+    # misses one; the single path takes it.
+    ok &= np.abs(Gd @ Z).max(axis=(1, 2), initial=0.0) <= 1e-8 * np.abs(Gd).max(
+        axis=(1, 2), initial=0.0)
     return Z, ok
 
 

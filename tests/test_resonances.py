@@ -10,6 +10,7 @@ import mechcirc
 from reference import stb_eq7
 from reference.networks import UNSEEN_MODE_12_DECADES, damped_ladder_lines, grid_text
 from mechcirc.errors import NetlistError
+from reference import mp_nodal
 from reference.inputs import STB
 
 
@@ -177,20 +178,6 @@ def _check_pair_against_mpmath(found, spec, near, dps=30):
     return pair
 
 
-def _spec_of(text):
-    """mp_nodal's spec of a netlist of elements, levers and a drive (no expressions)."""
-    spec = {"elements": [], "levers": [], "drive": None}
-    for line in text.splitlines():
-        words = line.split()
-        if words[0] == "drive":
-            spec["drive"] = (words[2], words[3])
-        elif words[0] == "lever":
-            spec["levers"].append((*words[1:6], float(words[6].split("=")[1])))
-        else:
-            spec["elements"].append((words[0], words[2], words[3], float(words[4])))
-    return spec
-
-
 def _mp_root(spec, r, dps=60):
     """The root of K (1/K at an anti-resonance) by mpmath's secant from ``r`` and a point
     1e-16 (relative) from it: close to a pole of the function, a wider first step
@@ -230,7 +217,7 @@ def test_close_pair_is_polished_without_stepping_past_its_partner():
     Its first step is now at most a quarter of the distance to the nearest root of the
     other kind: both roots within 4e-17 of mpmath's (60 digits), errors about 1e-15
     (asserted: 1e-13)."""
-    spec = _spec_of(CLOSE_PAIR_WITH_LEVERS)
+    spec = mp_nodal.spec_of(CLOSE_PAIR_WITH_LEVERS)
     found = mechcirc.parse(CLOSE_PAIR_WITH_LEVERS).resonances()
     pair = [r for r in found if abs(r.omega - 31263.1096215) <= 1e-6 * r.omega]
     assert sorted(r.kind for r in pair) == ["antiresonance", "resonance"]
@@ -256,7 +243,7 @@ lever L0 n1 0 n3 0 ratio=1.1682177732927441
 lever L1 n1 0 n2 0 ratio=304.6777583825343
 """
     (r,) = mechcirc.parse(text).resonances()
-    exact = _mp_root(_spec_of(text), r)
+    exact = _mp_root(mp_nodal.spec_of(text), r)
     assert abs(abs(exact) - r.omega) <= r.error * abs(exact), (r, exact)
     assert r.error <= 1e-13
 
@@ -273,7 +260,7 @@ def test_a_mode_in_both_problems_cancels_where_the_estimates_are_no_bounds():
     from reference import mp_nodal
 
     text = UNSEEN_MODE_12_DECADES
-    spec = _spec_of(text)
+    spec = mp_nodal.spec_of(text)
     found = mechcirc.parse(text).resonances()
     assert [r.kind for r in found] == ["resonance", "antiresonance"]
     for r in found:

@@ -64,6 +64,23 @@ def random_network(rng: np.random.Generator, *, n_nodes: int, damped: bool,
     return "\n".join(lines) + "\n", spec, w_char
 
 
+def spec_of(text):
+    """The spec of a netlist of elements, levers and a drive (numbers, no expressions;
+    ``{name}`` already substituted, ``.param`` lines skipped)."""
+    spec = {"elements": [], "levers": [], "drive": None}
+    for line in text.splitlines():
+        words = line.split()
+        if not words or words[0] == ".param":
+            continue
+        if words[0] == "drive":
+            spec["drive"] = (words[2], words[3])
+        elif words[0] == "lever":
+            spec["levers"].append((*words[1:6], float(words[6].split("=")[1])))
+        else:
+            spec["elements"].append((words[0], words[2], words[3], float(words[4])))
+    return spec
+
+
 def _matrices(spec, dps):
     names = sorted(({n for _, a, b, _ in spec["elements"] for n in (a, b)} |
                     {n for lv in spec["levers"] for n in lv[1:5]}) - {"0"})
