@@ -380,11 +380,11 @@ class Designs(Memos):
         series–parallel: the same stacked eigenproblems, every root polished as
         :func:`~mechcirc.resonances.find_resonances` polishes it, the complex
         secant on the design's own K(s) from the stacked nodal solve
-        (:func:`_nodal_roots`).  The others (an undamped mass matrix too close to
-        singular, or a damped one that is singular beyond the reversed problem's
-        reach, levers whose ratio varies in a network that is not series–parallel,
-        a mode in both the
-        held and released problems) go through
+        (:func:`_nodal_roots`); designs whose lever ratios differ from the template's
+        each on a constraint basis of their own.  The others (an undamped mass matrix
+        too close to singular, or a damped one that is singular beyond the reversed
+        problem's reach, lever ratios whose constraints the template's pivots do not
+        take, a mode in both the held and released problems) go through
         :func:`mechcirc.resonances.find_resonances` one by one (``single``).
         """
         D = self.size
