@@ -639,7 +639,8 @@ def _group_basis(ds: Designs, system, G, which: NDArray, shared: bool):
     the template's (n, k) where their lever ratios are ``shared`` (``exact``: see
     :func:`mechcirc.resonances.exact_basis`), else one per design (D', n, k) by
     :func:`mechcirc.resonances.design_bases`, ``ok`` false where a design's pivots are
-    ill-conditioned (the single path takes it)."""
+    ill-conditioned or its constraints have a rank the template's have not (the single
+    path takes it)."""
     if shared:
         return constraint_basis(G, len(system.nodes)).toarray(), exact_basis(G), True
     Z, ok = design_bases(ds, system, G, which)
