@@ -233,7 +233,7 @@ def resonance_pairs(circuit: Circuit, omega_max: float | None = None,
     M, D, Ks, G_released, G_held, damped = pencil(system, dense=system.size <= nodal.DENSE_LIMIT)
     held, v_held, released, v_released, keep_h, keep_r = _solved(
         M, D, Ks, G_released, G_held, damped, omega_max, vectors,
-        lambda h, r: _pair_verdict(system, h, r))
+        lambda h, r: _pair_verdict(system, h, r, where=True))
     pairs = []          # ((kind, s, error, must polish), (vector, repeated)) of each root
     for name, found, V, keep in (("resonance", held, v_held, keep_h),
                                  ("antiresonance", released, v_released, keep_r)):
@@ -912,6 +912,8 @@ def _cancel(held: np.ndarray, released: np.ndarray, verdict=None):
         elif d[j] < 1e3 * e or (loose and d[j] < UNBOUNDED_PAIR):
             said = None if verdict is None or not _alone(
                 s, released[j, 0], held[:, 0], released[:, 0]) else verdict(s, released[j, 0])
+            if isinstance(said, tuple):     # a pair, and where K has it: the polish's start
+                said, held[i, 0], released[j, 0] = said
             same = said is False if d[j] >= 1e3 * e else said is not True
         else:
             same = False
@@ -926,7 +928,7 @@ def _alone(h: complex, r: complex, held: np.ndarray, released: np.ndarray) -> bo
     return int(near.sum()) == 2
 
 
-def _pair_verdict(system, h: complex, r: complex) -> bool | None:
+def _pair_verdict(system, h: complex, r: complex, where: bool = False):
     """Whether K of ``system`` has a zero at ``h`` and a pole at ``r`` (True: a mode the
     drive sees, weakly), or neither (False: one mode, unseen, in both problems); None
     where K cannot tell.
@@ -934,13 +936,52 @@ def _pair_verdict(system, h: complex, r: complex) -> bool | None:
     Near the pair K ≈ K₀(s − h)/(s − r), K₀ about constant (:func:`_alone`: no other
     root within 4|h − r|): one step beyond each root, at 2r − h and 2h − r, the
     quotient of K is 2 / ½ = 4 where the pair is in K, 1 where it cancels.  Told
-    apart at 2, when K is known there to 10 %.
+    apart at 2, when K is known there to 10 %.  Where that says "cancels", a zero and a
+    pole found within ten spacings (:func:`_mobius_pair`) say a pair after all; with
+    ``where``, ``(True, zero, pole)`` then, K's own, for the polish to start from.
     """
     K, dK = nodal.evaluate_complex(system, np.array([2 * r - h, 2 * h - r]))
     with np.errstate(all="ignore"):
         if not np.all(dK <= 0.1 * np.abs(K)):
             return None
-        return bool(abs(K[0]) > 2 * abs(K[1]))
+        if abs(K[0]) > 2 * abs(K[1]):
+            return True
+    # "Cancels" where K was asked: but eigen-solves whose estimates are no bounds can
+    # put h and r farther from K's zero and pole than these lie apart (1e-10 off for a
+    # pair 4.3e-11 apart).  A zero and a pole found within ten spacings say a pair.
+    found = _mobius_pair(system, h, r, 10 * abs(h - r))
+    if found is None:
+        return False
+    zero, pole = found if h.real or r.real else (1j * found[0].imag, 1j * found[1].imag)
+    return (True, zero, pole) if where else True
+
+
+def _mobius_pair(system, h: complex, r: complex, scale: float):
+    """``(zero, pole)`` of K of ``system`` where both lie within 3·``scale`` of
+    (h + r)/2, else None (neither, or the fit below is not clear).
+
+    Near an isolated pair K(s) = (α τ + β)/(τ − q) in τ = (s − c)/(scale·u), c the
+    midpoint and u the direction from h to r: three samples of K along that line give
+    α, β, q (a linear solve), a fourth checks the fit to 1 %; the zero is at −β/α.
+    """
+    u = (r - h) / abs(r - h) if r != h else 1j
+    tau = np.array([-1.9, -0.6, 0.7, 1.8])
+    K, dK = nodal.evaluate_complex(system, (h + r) / 2 + scale * u * tau)
+    with np.errstate(all="ignore"):
+        if not np.all(dK <= 1e-3 * np.abs(K)) or not np.all(np.isfinite(K)):
+            return None
+        A = np.column_stack([tau[:3], np.ones(3), K[:3]]).astype(complex)
+        try:
+            alpha, beta, q = np.linalg.solve(A, K[:3] * tau[:3])
+        except np.linalg.LinAlgError:
+            return None
+        if not abs((alpha * tau[3] + beta) / (tau[3] - q) - K[3]) <= 1e-2 * abs(K[3]):
+            return None
+        zero = -beta / alpha
+        if abs(q) <= 3 and abs(zero) <= 3 and abs(q - zero) > 1e-6:
+            c = (h + r) / 2
+            return c + scale * u * zero, c + scale * u * q
+        return None
 
 
 def _make(kind: Kind, s: complex, err: float) -> Resonance:
