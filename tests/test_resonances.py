@@ -192,6 +192,19 @@ def _mp_root(spec, r, dps=60):
                                        tol=mpmath.mpf(10) ** (10 - dps)))
 
 
+def _assert_pair_as_mpmath(text, omega):
+    """The resonance and anti-resonance of ``text`` within 1e-6 of ``omega`` are found, each
+    within its error of mpmath's root and that error below 1e-13."""
+    spec = mp_nodal.spec_of(text)
+    pair = [r for r in mechcirc.parse(text).resonances()
+            if abs(r.omega - omega) <= 1e-6 * r.omega]
+    assert sorted(r.kind for r in pair) == ["antiresonance", "resonance"]
+    for r in pair:
+        exact = _mp_root(spec, r)
+        assert abs(abs(exact) - r.omega) <= r.error * abs(exact), (r, exact)
+        assert r.error <= 1e-13, r
+
+
 #: Random network 89 of mp_nodal.random_network (seed 1): damped, two levers, values over
 #: 12 decades; a weakly seen mode at 31263.1 rad/s puts K's zero and pole 8.4e-14 apart.
 CLOSE_PAIR_WITH_LEVERS = """drive V n1 0 velocity=1
@@ -217,14 +230,7 @@ def test_close_pair_is_polished_without_stepping_past_its_partner():
     Its first step is now at most a quarter of the distance to the nearest root of the
     other kind: both roots within 4e-17 of mpmath's (60 digits), errors about 1e-15
     (asserted: 1e-13)."""
-    spec = mp_nodal.spec_of(CLOSE_PAIR_WITH_LEVERS)
-    found = mechcirc.parse(CLOSE_PAIR_WITH_LEVERS).resonances()
-    pair = [r for r in found if abs(r.omega - 31263.1096215) <= 1e-6 * r.omega]
-    assert sorted(r.kind for r in pair) == ["antiresonance", "resonance"]
-    for r in pair:
-        exact = _mp_root(spec, r)
-        assert abs(abs(exact) - r.omega) <= r.error * abs(exact), (r, exact)
-        assert r.error <= 1e-13, r
+    _assert_pair_as_mpmath(CLOSE_PAIR_WITH_LEVERS, 31263.1096215)
 
 
 #: Random network 45 of mp_nodal.random_network (seed 4, design 7 of a batch fuzz): a lever
@@ -251,14 +257,7 @@ def test_a_pair_closer_than_its_eigen_solves_errors_is_found():
     Möbius fit of K over ten spacings (resonances._mobius_pair) finds the zero and the pole,
     and the polish starts there: both roots within 4e-16 of mpmath's (60 digits), errors
     about 2e-15 (asserted: 1e-13)."""
-    spec = mp_nodal.spec_of(WEAK_PAIR_LOOSE_ESTIMATES)
-    found = mechcirc.parse(WEAK_PAIR_LOOSE_ESTIMATES).resonances()
-    pair = [r for r in found if abs(r.omega - 2417.68346463) <= 1e-6 * r.omega]
-    assert sorted(r.kind for r in pair) == ["antiresonance", "resonance"]
-    for r in pair:
-        exact = _mp_root(spec, r)
-        assert abs(abs(exact) - r.omega) <= r.error * abs(exact), (r, exact)
-        assert r.error <= 1e-13, r
+    _assert_pair_as_mpmath(WEAK_PAIR_LOOSE_ESTIMATES, 2417.68346463)
 
 
 def test_roots_of_a_lever_network_are_within_their_eigenvalue_bound():
