@@ -49,7 +49,8 @@ from .resonances import (MAX_UNKNOWNS, MAX_UNKNOWNS_DAMPED, POLISH_BELOW, Resona
                          constraint_basis, design_values, exact_basis, element_patterns, find_resonances,
                          g_and_bound, held_and_released, pencil, secant_polish, settled,
                          shared_roots_free, sorted_roots, stacked_problem, template_levers,
-                         unbounded, design_bases, design_verdict, row_spacing)
+                         unbounded, design_bases, design_lever_values, design_verdict,
+                         row_spacing)
 from .sources import brief, data_frame, summary_repr
 
 __all__ = ["designs", "from_circuits", "network_shape", "Designs", "DesignSweep", "DesignResonances",
@@ -695,27 +696,10 @@ def _stacked_matrices(ds: Designs, system, which: NDArray):
         X = np.zeros((which.size, n, n))
         X[:, :nn, :nn] = (S @ B[kind].reshape(S.shape[1], -1)).reshape(-1, nn, nn)
         parts.append(X)
-    levers = _lever_values(ds, system, which)
+    levers = design_lever_values(ds, system, which)
     for t, (r, c) in enumerate(zip(*system.stamps["lever"][:2])):    # (a few stamps)
         parts[0][:, r, c] += levers[0][:, t]
     return S, parts, levers
-
-
-def _lever_values(ds: Designs, system, which: NDArray) -> tuple[NDArray, NDArray]:
-    """The value of each of ``system``'s lever stamps in designs ``which``, (D', stamps):
-    ±ratio on a lever's primary side with the design's ratio, else the system's own
-    (±1, and a held drive's constraint); and each lever's |ratio|, (D', levers)."""
-    from . import nodal
-
-    index = {name: i for i, name in enumerate(system.nodes)}
-    row = {lv.name: i for i, lv in enumerate(ds.circuit.levers)}
-    ratios = ds.ratios[[row[lv.name] for lv in system.levers]][:, which].T     # (D', L)
-    values = np.repeat(np.asarray(system.stamps["lever"][2], dtype=float)[None], which.size, 0)
-    pos = {lv.name: k for k, lv in enumerate(system.levers)}
-    for t, (_, _, _, sign, lever, ratio) in enumerate(nodal.stamps((), system.levers, index)):
-        if ratio:
-            values[:, t] = sign * ratios[:, pos[lever.name]]
-    return values, np.abs(ratios)
 
 
 def _alone(ds: Designs, which: NDArray, compute) -> tuple[dict, dict[int, str]]:

@@ -1244,6 +1244,22 @@ def design_values(ds, system, which: np.ndarray) -> np.ndarray:
     return (ds.values[el][:, which] * ds.eta[el][:, which]).T
 
 
+def design_lever_values(ds, system, which: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The value of each of ``system``'s lever stamps in designs ``which`` of ``ds``, (D',
+    stamps): ±ratio on a lever's primary side with the design's ratio, else the system's
+    own (±1, and a held drive's constraint, which follows the levers'); and each lever's
+    |ratio|, (D', levers)."""
+    index = {name: i for i, name in enumerate(system.nodes)}
+    row = {lv.name: i for i, lv in enumerate(ds.circuit.levers)}
+    ratios = ds.ratios[[row[lv.name] for lv in system.levers]][:, which].T     # (D', L)
+    values = np.repeat(np.asarray(system.stamps["lever"][2], dtype=float)[None], which.size, 0)
+    pos = {lv.name: k for k, lv in enumerate(system.levers)}
+    for t, (_, _, _, sign, lever, ratio) in enumerate(nodal.stamps((), system.levers, index)):
+        if ratio:
+            values[:, t] = sign * ratios[:, pos[lever.name]]
+    return values, np.abs(ratios)
+
+
 def design_verdict(ds, which: np.ndarray):
     """``verdict(k, s_held, s_released)``: :func:`_pair_verdict` on the circuit of design
     ``which[k]`` of ``ds`` (built once for all its pairs)."""
@@ -1359,13 +1375,12 @@ def design_bases(ds, system, G: np.ndarray, which: np.ndarray) -> tuple:
     design (G_p's singular values more than 1e8 apart) or its constraints have a rank
     the template's have not, which the single path takes."""
     n, L = G.shape[1], len(system.levers)
-    index = {name: i for i, name in enumerate(system.nodes)}
-    lev = {lv.name: i for i, lv in enumerate(ds.circuit.levers)}
     Gd = np.repeat(G[None], which.size, axis=0)
     Gd[:, :L] = 0.0
-    for _, r, c, sign, lever, ratio in nodal.stamps((), system.levers, index):
-        if r >= n:                                  # a constraint row's entry
-            Gd[:, r - n, c] += sign * (ds.ratios[lev[lever.name], which] if ratio else 1.0)
+    values, _ = design_lever_values(ds, system, which)
+    for t, (r, c) in enumerate(zip(*system.stamps["lever"][:2])):
+        if n <= r < n + L:                          # a lever constraint row's entry
+            Gd[:, r - n, c] += values[:, t]
     pivots, free = _pivots(G)
     rank = pivots.size
     Gp, Gf = Gd[:, :, pivots], Gd[:, :, free]

@@ -147,8 +147,6 @@ def _spec(lines):
 
 def test_damped_ladder_roots_are_within_their_error_of_mpmath():
     """Issue 11 §5: the overdamped root s ≈ −1.4e-3 was off by 6.3e-7 with error 5.6e-9."""
-    from reference import mp_nodal
-
     text, lines = _ladder(45)
     found = mechcirc.parse(text).resonances()
     spec = _spec(lines)
@@ -167,8 +165,6 @@ def test_damped_ladder_roots_are_within_their_error_of_mpmath():
 def _check_pair_against_mpmath(found, spec, near, dps=30):
     """The resonance and the anti-resonance within 1e-6 of ``near`` are one each, and
     each is within its error of the root mpmath finds from it."""
-    from reference import mp_nodal
-
     pair = [r for r in found if abs(r.omega - near) <= 1e-6 * near]
     assert sorted(r.kind for r in pair) == ["antiresonance", "resonance"], pair
     for r in pair:
@@ -182,8 +178,6 @@ def _mp_root(spec, r, dps=60):
     """The root of K (1/K at an anti-resonance) by mpmath's secant from ``r`` and a point
     1e-16 (relative) from it: close to a pole of the function, a wider first step
     leaves for elsewhere."""
-    from reference import mp_nodal
-
     with mpmath.workdps(dps):
         f = (lambda z: mp_nodal.inverse_K(spec, z, dps)) if r.kind == "antiresonance" else \
             (lambda z: mp_nodal.K(spec, z, dps))
@@ -290,8 +284,6 @@ def test_a_mode_in_both_problems_cancels_where_the_estimates_are_no_bounds():
     a resonance at 7464.2992 rad/s (error 6 %) and an anti-resonance at 7464.3002 (error
     1000 %).  K (mpmath, 40 digits) has neither: it changes by 1.3e-7 between them.
     Such a pair, within 1e-6, is now asked of K, which says it cancels."""
-    from reference import mp_nodal
-
     text = UNSEEN_MODE_12_DECADES
     spec = mp_nodal.spec_of(text)
     found = mechcirc.parse(text).resonances()
@@ -308,8 +300,6 @@ def test_weakly_coupled_pair_of_the_damped_ladder_is_reported():
     K has its zero and pole 3.0e-11 apart (relative), 4 000 times their estimates (about
     3.7e-15 each), and was taken for one mode in both problems and dropped (1e3 × the
     estimates).  K itself (mpmath, 40 digits) is 0.0537 and 0.0134 one step beyond each."""
-    from reference import mp_nodal
-
     text, lines = _ladder(45)
     found = mechcirc.parse(text).resonances()
     spec = _spec(lines)
