@@ -729,8 +729,8 @@ def test_nodal_designs_resonances_on_their_own_lever_ratios():
             # honest; ω the same to an ulp)
             exact = mp_nodal.root(spec, 1j * r.omega, r.kind == "antiresonance").imag
             assert abs(r.omega - exact) <= r.error * exact
-    assert res.list(0)[-1].kind == "antiresonance"
-    assert res.list(0)[-1].omega == pytest.approx(417.0916538957312, rel=1e-13)
+    # the anti-resonance the badly scaled basis lost (its value checked against mpmath above)
+    assert res.list(0)[-1].kind == "antiresonance" and abs(res.list(0)[-1].omega - 417.09) < 0.01
 
 
 def test_nodal_designs_whose_levers_constrain_more_than_the_templates_go_alone():
