@@ -49,8 +49,14 @@ def two_sum(a, b):
 @_inline
 def two_prod(a, ah, al, b):
     """a·b = p + e exactly (Dekker's TwoProduct; real ``a`` split beforehand as ah + al)."""
-    p = a * b
     bh, bl = split(b)
+    return two_prod_split(a, ah, al, b, bh, bl)
+
+
+@_inline
+def two_prod_split(a, ah, al, b, bh, bl):
+    """:func:`two_prod` with ``b`` split beforehand too, as bh + bl."""
+    p = a * b
     return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
 
 
@@ -96,8 +102,22 @@ def dd_norm(h, lo):
 def dd_mul(ah, al, bh, bl):
     """(ah + al)(bh + bl) (real)."""
     a1, a2 = split(ah)
-    p, e = two_prod(ah, a1, a2, bh)
-    return dd_norm(p, e + (ah * bl + al * bh))
+    b1, b2 = split(bh)
+    return dd_mul_split((ah, a1, a2, al), (bh, b1, b2, bl))
+
+
+def dd_mul_split(a, b):
+    """:func:`dd_mul` of two values given with their high parts split, as
+    ``(hi, hi's high half, hi's low half, lo)`` (:func:`with_splits`)."""
+    p, e = two_prod_split(a[0], a[1], a[2], b[0], b[1], b[2])
+    return dd_norm(p, e + (a[0] * b[3] + a[3] * b[0]))
+
+
+def with_splits(a):
+    """A complex double-double value (re hi, re lo, im hi, im lo) as its real and
+    imaginary parts, each ``(hi, *split(hi), lo)``: what :func:`dd_mul_split` takes, so
+    that a value used in several products is split once."""
+    return (a[0], *split(a[0]), a[1]), (a[2], *split(a[2]), a[3])
 
 
 @_inline
@@ -116,16 +136,21 @@ def dd_div_dd(ah, al, bh, bl):
     return q, ((((ah - p) - e) + al) - q * bl) / bh
 
 
-def cdd_mul(a, b):
-    """Complex double-double product; a value is (re_hi, re_lo, im_hi, im_lo)."""
-    rr, ii = dd_mul(a[0], a[1], b[0], b[1]), dd_mul(a[2], a[3], b[2], b[3])
-    ri, ir = dd_mul(a[0], a[1], b[2], b[3]), dd_mul(a[2], a[3], b[0], b[1])
+def cdd_mul(a, b, split_a=None):
+    """Complex double-double product; a value is (re_hi, re_lo, im_hi, im_lo).
+
+    ``split_a``: :func:`with_splits` of ``a`` (then ``a`` is not read), where the caller
+    has it already."""
+    (ar, ai), (br, bi) = split_a or with_splits(a), with_splits(b)
+    rr, ii = dd_mul_split(ar, br), dd_mul_split(ai, bi)
+    ri, ir = dd_mul_split(ar, bi), dd_mul_split(ai, br)
     return (*dd_sub(*rr, *ii), *dd_norm(*dd_add(*ri, *ir)))
 
 
 def cdd_div(a, b):
     """Complex double-double quotient a / b (b of moderate size: no overflow check)."""
-    den = dd_norm(*dd_add(*dd_mul(b[0], b[1], b[0], b[1]), *dd_mul(b[2], b[3], b[2], b[3])))
-    re = dd_norm(*dd_add(*dd_mul(a[0], a[1], b[0], b[1]), *dd_mul(a[2], a[3], b[2], b[3])))
-    im = dd_sub(*dd_mul(a[2], a[3], b[0], b[1]), *dd_mul(a[0], a[1], b[2], b[3]))
+    (ar, ai), (br, bi) = with_splits(a), with_splits(b)
+    den = dd_norm(*dd_add(*dd_mul_split(br, br), *dd_mul_split(bi, bi)))
+    re = dd_norm(*dd_add(*dd_mul_split(ar, br), *dd_mul_split(ai, bi)))
+    im = dd_sub(*dd_mul_split(ai, br), *dd_mul_split(ar, bi))
     return (*dd_norm(*dd_div_dd(*re, *den)), *dd_norm(*dd_div_dd(*im, *den)))

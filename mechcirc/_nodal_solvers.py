@@ -113,22 +113,29 @@ class DDSolver:
             good &= np.isfinite(X[0]).all(axis=(1, 2)) & np.isfinite(X[2]).all(axis=(1, 2))
         X, perm, d = [x[good] for x in X], perm[good], d[good]
         every = np.arange(perm.shape[0])
+        with np.errstate(all="ignore"):     # the factors' Veltkamp splits, once for every solve
+            X = [X[0], *split(X[0]), X[1], X[2], *split(X[2]), X[3]]
 
         def solve(r, rows=None):
             rows = every if rows is None else np.asarray(rows)
             b = np.take_along_axis(np.asarray(r, dtype=complex) * d[rows], perm[rows], axis=1)
             F = [x[rows] for x in X]
+
+            def entries(at):                # F[at] as cdd_mul's split operand
+                return tuple(f[at] for f in F[:4]), tuple(f[at] for f in F[4:])
             y = [b.real.copy(), np.zeros(b.shape), b.imag.copy(), np.zeros(b.shape)]
             with np.errstate(all="ignore"):
                 for k in range(self.n - 1):          # L (unit diagonal)
-                    t = cdd_mul([f[:, k + 1:, k] for f in F], [v[:, k, None] for v in y])
+                    t = cdd_mul(None, [v[:, k, None] for v in y],
+                                entries((slice(None), slice(k + 1, None), k)))
                     _csub_at(y, (slice(None), slice(k + 1, None)), t)
                 for k in range(self.n - 1, -1, -1):  # U
-                    q = cdd_div([v[:, k] for v in y], [f[:, k, k] for f in F])
+                    q = cdd_div([v[:, k] for v in y], [F[i][:, k, k] for i in (0, 3, 4, 7)])
                     for v, u in zip(y, q):
                         v[:, k] = u
                     if k:
-                        t = cdd_mul([f[:, :k, k] for f in F], [u[:, None] for u in q])
+                        t = cdd_mul(None, [u[:, None] for u in q],
+                                    entries((slice(None), slice(None, k), k)))
                         _csub_at(y, (slice(None), slice(None, k)), t)
             return ((y[0] + y[1]) + 1j * (y[2] + y[3])) * d[rows]
         return good, solve
