@@ -98,16 +98,8 @@ def dd_norm(h, lo):
     return s, lo - (s - h)
 
 
-@_inline
-def dd_mul(ah, al, bh, bl):
-    """(ah + al)(bh + bl) (real)."""
-    a1, a2 = split(ah)
-    b1, b2 = split(bh)
-    return dd_mul_split((ah, a1, a2, al), (bh, b1, b2, bl))
-
-
 def dd_mul_split(a, b):
-    """:func:`dd_mul` of two values given with their high parts split, as
+    """(ah + al)(bh + bl) (real) of two values given with their high parts split, as
     ``(hi, hi's high half, hi's low half, lo)`` (:func:`with_splits`)."""
     p, e = two_prod_split(a[0], a[1], a[2], b[0], b[1], b[2])
     return dd_norm(p, e + (a[0] * b[3] + a[3] * b[0]))
