@@ -755,6 +755,14 @@ def mobility_and_error(system: NodalSystem, omega: ArrayLike
     return s.K, s.error
 
 
+def mobility_unrefined(system: NodalSystem, omega: ArrayLike) -> NDArray[np.complex128]:
+    """K(ω) [m/(N·s)] by one plain solve per ω, without refinement (the fast path).
+
+    Its relative error is about eps × cond(A(ω)) (:func:`solve` refines it away).
+    """
+    return solve(system, omega, refine=False, limits=False, keep_x=False).K
+
+
 def element_response(system: NodalSystem, omega: ArrayLike, scale: NDArray, *,
                      refine: bool = True) -> dict[str, tuple]:
     """``{name: (Q, v)}`` for every loaded element, for a drive force ``scale`` [N] per ω
