@@ -18,7 +18,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .circuit import Circuit, Drive, units_of
-from .errors import InputError, MechcircError, NotSeriesParallelError, TopologyError
+from .errors import (InputError, MechcircError, NotSeriesParallelError, PeakAccuracyWarning,
+                     TopologyError, warn)
 from .reduction import Node, evaluate, push_down
 from .sources import brief, data_frame, did_you_mean, name_index
 
@@ -606,6 +607,12 @@ class Peak:
         Every ω [rad/s] in the band where the quantity is unbounded.
     grid_value, grid_omega : float
         The largest finite value on the sweep's grid and where (for comparison).
+    note : str
+        Empty when the peak was located around every resonance in the band;
+        otherwise why the resonances could not be found, the peak then searched
+        around the grid's largest value only (a narrow peak between two grid
+        points may be missed; a :class:`~mechcirc.errors.PeakAccuracyWarning`
+        said so).
     """
 
     quantity: str
@@ -615,19 +622,16 @@ class Peak:
     poles: tuple = ()
     grid_value: float = math.nan
     grid_omega: float = math.nan
+    note: str = ""
 
     def __str__(self) -> str:
         if self.unbounded:
             at = ", ".join(f"{w:.10g}" for w in self.poles)
-            return f"max |{self.quantity}| = inf (undamped resonance at omega = {at} rad/s)"
-        return f"max |{self.quantity}| = {self.value:.7g} at omega = {self.omega:.10g} rad/s"
+            text = f"max |{self.quantity}| = inf (undamped resonance at omega = {at} rad/s)"
+        else:
+            text = f"max |{self.quantity}| = {self.value:.7g} at omega = {self.omega:.10g} rad/s"
+        return f"{text} ({self.note})" if self.note else text
 
-
-#: Circuits with more elements are not handed to the eigen-solver by
-#: :func:`peak` (its dense solve is O(n³)): the peak is then searched around the
-#: grid's maximum only, and an exact pole shows as ``inf`` only if a point or
-#: the search lands on it.
-PEAK_RESONANCE_LIMIT = 500
 
 #: Damping ratio below which a zero or pole of K counts as undamped for
 #: :func:`peak` (the eigen-solver reports ζ = 0 for lossless modes).
@@ -666,9 +670,10 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
         holds an undamped zero of K (for Q0 and S) or pole of K (for v0 and K),
         found exactly by :meth:`Circuit.resonances`; otherwise the maximum
         located by a golden-section search around the grid's largest value and
-        around every damped resonance of the right kind in the band.  Above
-        :data:`PEAK_RESONANCE_LIMIT` elements the resonances are not computed
-        (grid search only).
+        around every damped resonance of the right kind in the band; where the
+        resonances cannot be found (e.g. more in the band than the band solver
+        takes), around the grid's largest value only, with :attr:`Peak.note`
+        saying so and a :class:`~mechcirc.errors.PeakAccuracyWarning`.
 
     Examples
     --------
@@ -696,7 +701,9 @@ def _located_peak(circuit, grid, lo: float, hi: float, quantity: str, method: Me
                   xtol: float, resonances) -> Peak:
     """:func:`peak` once its arguments are checked: the exact roots, the grid, the bracket searches."""
     refine = True if grid is None else grid.refine     # solve as the sweep did
-    found = _peak_roots(circuit, lo, hi, quantity, resonances)
+    found, note = _peak_roots(circuit, lo, hi, quantity, resonances)
+    if note:
+        warn(f"peak: {note}", PeakAccuracyWarning)
     undamped = tuple(r.omega for r in found if r.zeta <= UNDAMPED_ZETA)
     if grid is None:
         grid = sweep(circuit, peak_grid(lo, hi), method=method, refine=refine)
@@ -706,7 +713,7 @@ def _located_peak(circuit, grid, lo: float, hi: float, quantity: str, method: Me
     g_value = float(q_grid[i_grid]) if finite.any() else math.nan
     g_omega = float(grid.omega[i_grid]) if finite.any() else math.nan
     if undamped:
-        return Peak(quantity, math.inf, undamped[0], True, undamped, g_value, g_omega)
+        return Peak(quantity, math.inf, undamped[0], True, undamped, g_value, g_omega, note)
     # Brackets: the grid's maximum with its neighbours, and each damped
     # resonance of the right kind ± four half-power bandwidths.
     w = grid.omega
@@ -719,8 +726,8 @@ def _located_peak(circuit, grid, lo: float, hi: float, quantity: str, method: Me
     if math.isinf(best_value):
         # An exact pole the eigen-solver did not report as undamped (or could
         # not be run): unbounded all the same.
-        return Peak(quantity, math.inf, best_omega, True, (best_omega,), g_value, g_omega)
-    return Peak(quantity, best_value, best_omega, False, (), g_value, g_omega)
+        return Peak(quantity, math.inf, best_omega, True, (best_omega,), g_value, g_omega, note)
+    return Peak(quantity, best_value, best_omega, False, (), g_value, g_omega, note)
 
 
 def peak_grid(lo: float, hi: float) -> NDArray:
@@ -753,23 +760,22 @@ def _peak_band(result, omega_min, omega_max) -> tuple:
     return circuit, grid, lo, hi
 
 
-def _peak_roots(circuit, lo: float, hi: float, quantity: str, resonances) -> list:
-    """The roots of ``circuit`` in [lo, hi] where |quantity| may be unbounded: zeros of K
-    ("resonance") for Q0 and S, poles ("antiresonance") for v0 and K; from
-    ``resonances`` when given, else computed (not above :data:`PEAK_RESONANCE_LIMIT`
-    elements, nor where the eigen-solver refuses)."""
+def _peak_roots(circuit, lo: float, hi: float, quantity: str, resonances) -> tuple:
+    """``(roots, note)``: the roots of ``circuit`` in [lo, hi] where |quantity| may be
+    unbounded — zeros of K ("resonance") for Q0 and S, poles ("antiresonance") for v0 and
+    K — from ``resonances`` when given, else computed; and ``""``, or why they could not
+    be computed (then no roots: the search is the grid's)."""
     kind = "resonance" if quantity in ("Q0", "S") else "antiresonance"
     if resonances is not None:
         return [r for r in resonances if r.kind == kind and lo * (1 - 1e-12) <= r.omega
-                and r.omega <= hi * (1 + 1e-9)]
-    if len(circuit.elements) > PEAK_RESONANCE_LIMIT:
-        return []
+                and r.omega <= hi * (1 + 1e-9)], ""
     try:
         # Only this kind is polished (the other's polish is half the work).
         return [r for r in circuit.resonances(omega_max=hi * (1 + 1e-9), kind=kind)
-                if lo * (1 - 1e-12) <= r.omega]
-    except Exception:   # e.g. refused by the eigen-solver: grid search only
-        return []
+                if lo * (1 - 1e-12) <= r.omega], ""
+    except MechcircError as exc:    # e.g. more roots in the band than the band solver takes
+        return [], (f"searched around the grid's largest value only, a narrow peak between "
+                    f"two grid points may be missed: the resonances were not found ({exc})")
 
 
 def _peak_search(circuit, method, quantity, lo, hi, brackets, best_value, best_omega, xtol,

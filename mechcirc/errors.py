@@ -30,6 +30,7 @@ __all__ = [
     "SleyAccuracyWarning",
     "ShaftWarning",
     "FollowerFlightWarning",
+    "PeakAccuracyWarning",
     "MAX_QUOTED",
     "clip",
     "shorten",
@@ -297,6 +298,11 @@ class FollowerFlightWarning(MechcircWarning):
 
 class ShaftWarning(MechcircWarning):
     """A dynamic main shaft's motor cannot give the peak load torque (the flywheel carries it)."""
+
+
+class PeakAccuracyWarning(MechcircWarning):
+    """A peak was searched around the sweep's grid only (the circuit's resonances could not
+    be found): a narrow peak between two grid points may be missed (:attr:`Peak.note`)."""
 
 
 class SleyAccuracyWarning(MechcircWarning):

@@ -259,6 +259,63 @@ def test_damped_peak_located_to_1e_6(m, k, c):
     assert p.grid_value < p.value
 
 
+def _ladder_impedance(lines, w):
+    """|Q0| = |1/K| of a ``damped_ladder_lines`` ladder driven at n0 by V = 1, as its
+    continued fraction written here (numpy, not mechcirc): spring i joins node i to node
+    i + 1; from the far end, each node's admittance is its mass's jωm and damper's c plus
+    what its next spring passes on (nothing, from a node with nothing at it)."""
+    springs, shunt = [], {}
+    for line in lines[1:]:
+        kind, _, a, _, value = line.split()
+        if kind == "spring":
+            springs.append(float(value))
+        else:
+            shunt.setdefault(int(a[1:]), []).append((kind, float(value)))
+    jw = 1j * np.asarray(w, dtype=float)
+    load = 0 * jw                                 # the admittance beyond the last node
+    for i in range(len(springs) - 1, 0, -1):      # node i, spring i beyond it
+        passed = 1 / (jw / springs[i] + 1 / load) if np.all(load != 0) else 0 * jw
+        load = passed + sum(jw * v if kind == "mass" else v for kind, v in shunt[i])
+    return np.abs(1 / (jw / springs[0] + 1 / load))
+
+
+def test_peak_of_a_large_network_is_located_at_its_resonance_not_near_the_grid():
+    """Above 500 elements peak() searched around the grid's largest value only: this
+    510-element ladder gave 2.09e5 N on 401 points over 1 ... 1e3 rad/s, where |Q0|
+    reaches 3.14e6 N at 231.39 rad/s (a resonance 0.1 % wide between two grid points)."""
+    from reference.networks import damped_ladder_lines
+
+    lines = damped_ladder_lines(510)
+    c = mechcirc.parse("\n".join(lines) + "\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", mechcirc.UnloadedElementWarning)
+        p = c.sweep(np.geomspace(1, 1e3, 401)).peak()
+    assert not p.unbounded and p.note == ""
+    # The located value is the reference's at that ω, and no point of a fine grid
+    # around it (the reference's own) lies above it.
+    assert p.value == pytest.approx(_ladder_impedance(lines, [p.omega])[0], rel=1e-9)
+    fine = _ladder_impedance(lines, np.linspace(p.omega * (1 - 1e-3), p.omega * (1 + 1e-3),
+                                                20001))
+    assert fine.max() <= p.value * (1 + 1e-9) and fine.max() >= p.value * (1 - 1e-6)
+    assert p.grid_value < p.value / 10               # what the grid alone gave
+
+
+def test_peak_says_when_it_could_only_search_the_grid():
+    """More roots in the band than the band solver takes: the peak is searched around the
+    grid's maximum, and both the Peak and a warning say so."""
+    from reference.networks import damped_ladder_lines
+
+    c = mechcirc.parse("\n".join(damped_ladder_lines(2999)) + "\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", mechcirc.UnloadedElementWarning)
+        s = c.sweep(np.geomspace(1, 1e3, 101))
+        with pytest.warns(mechcirc.errors.PeakAccuracyWarning, match="grid's largest value"):
+            p = s.peak()
+    assert "narrow peak between two grid points may be missed" in p.note
+    assert p.note in str(p)
+    assert p.value >= p.grid_value
+
+
 # ---------------------------------------------------------------------------
 # Plain data
 # ---------------------------------------------------------------------------

@@ -211,7 +211,7 @@ def _peak_doc(pk) -> dict:
     """The exact peak for ``--json``: value inf when unbounded (see mechcirc.peak)."""
     return {"quantity": pk.quantity, "value": pk.value, "omega": pk.omega,
             "unbounded": pk.unbounded, "unbounded_at": list(pk.poles),
-            "grid_value": pk.grid_value, "grid_omega": pk.grid_omega}
+            "grid_value": pk.grid_value, "grid_omega": pk.grid_omega, "note": pk.note}
 
 
 def _peak_text(pk, units: dict, unit: str = "rad/s") -> str:
@@ -221,8 +221,9 @@ def _peak_text(pk, units: dict, unit: str = "rad/s") -> str:
         return (f"max |{pk.quantity}| = inf: undamped resonance at {name} = "
                 f"{_some_omega(list(pk.poles), unit=unit)} {unit} (the grid's largest, "
                 f"{pk.grid_value:.4g} {q}, depends only on how close a point falls)")
+    where = f"{pk.note}; " if pk.note else "located; "
     return (f"max |{pk.quantity}| = {pk.value:.7g} {q} at {name} = "
-            f"{in_unit(pk.omega, unit):.9g} {unit} (located; the grid's largest is "
+            f"{in_unit(pk.omega, unit):.9g} {unit} ({where}the grid's largest is "
             f"{pk.grid_value:.4g} {q})")
 
 
@@ -260,10 +261,9 @@ def cmd_sweep(args) -> int:
     found = [r for r in everything or () if omega[0] <= r.omega <= omega[-1]]
     # (sweep_sensitivity imported above, where the names were checked)
     sens = sweep_sensitivity(circuit, result.omega, args.sensitivity) if args.sensitivity else None
-    from .._sweep import FLAG_SINGULAR, PEAK_RESONANCE_LIMIT, peak
+    from .._sweep import FLAG_SINGULAR, peak
 
-    pk = peak(result, resonances=everything if len(circuit.elements) <= PEAK_RESONANCE_LIMIT
-              else None)
+    pk = peak(result, resonances=everything)
     singular = [float(w) for w in result.omega[result.flags == FLAG_SINGULAR]]
     notes = list(getattr(result, "notes", ()))
     if singular:
