@@ -14,9 +14,9 @@ import contextlib
 
 import numpy as np
 
-from ._dd import cdd_div, cdd_mul, dd_div_d, dd_mul_d, dd_norm, dd_sub, split, two_sum
+from ._dd import cdd_div, cdd_mul, dd_add, dd_div_d, dd_mul_d, dd_norm, dd_sub, split, two_sum
 from ._nodal_equations import NodalSystem, combine
-from ._nodal_residual import Pattern, pattern
+from ._nodal_residual import Pattern, _complex_omega_terms, pattern
 
 __all__ = ["solver", "dd_solver", "balance", "DENSE_LIMIT", "DD_LIMIT", "BAND_MAX"]
 
@@ -94,19 +94,30 @@ class DDSolver:
         self.absdiag = [np.abs(np.diagonal(p[0])) for p in self.parts]
 
     def factor(self, omega, strict: bool = False):
-        omega = np.asarray(omega, dtype=float)
+        """(good, solve) at real ω, or at complex ω (the resonances' checks near a close
+        pair): A(ω) = D + C + j(ωM − Kₛ/ω) in double-double, then its LU."""
+        omega = np.asarray(omega)
+        omega = omega if np.iscomplexobj(omega) else omega.astype(float)
         w = omega[:, None, None]
         (ch, cl), (mh, ml), (kh, kl) = self.parts
+        B, n = omega.size, self.n
         with np.errstate(all="ignore"):
-            ws = split(w)
-            im = dd_norm(*dd_sub(*dd_mul_d(mh, ml, w, *ws), *dd_div_d(kh, kl, w, *ws)))
-            B, n = omega.size, self.n
-            X = [np.broadcast_to(ch, (B, n, n)).copy(), np.broadcast_to(cl, (B, n, n)).copy(),
-                 im[0], im[1]]
+            re = [np.broadcast_to(ch, (B, n, n)).copy(), np.broadcast_to(cl, (B, n, n)).copy()]
+            if np.iscomplexobj(omega):
+                # j(ωM − Kₛ/ω) = −Im(ωM − Kₛ/ω) + j Re(ωM − Kₛ/ω), each part double-double.
+                wm_re, wm_im, kw_re, kw_im = _complex_omega_terms(mh + 0j, ml + 0j, kh + 0j,
+                                                                  kl + 0j, w)
+                re = dd_norm(*dd_add(*dd_sub(*re, *wm_im), *kw_im))
+                im = dd_norm(*dd_sub(*wm_re, *kw_re))
+            else:
+                ws = split(w)
+                im = dd_norm(*dd_sub(*dd_mul_d(mh, ml, w, *ws), *dd_div_d(kh, kl, w, *ws)))
+            X = [*re, im[0], im[1]]
             mag = np.abs(X[0] + 1j * X[2])
             cd, md, kd = self.absdiag
-            d = balance(mag, cd + omega[:, None] * md + kd / omega[:, None])
-            good = np.isfinite(mag).all(axis=(1, 2)) & (omega > 0)
+            a = np.abs(omega)[:, None]
+            d = balance(mag, cd + a * md + kd / a)
+            good = np.isfinite(mag).all(axis=(1, 2)) & (np.abs(omega) > 0)
             dd = d[:, :, None] * d[:, None, :]
             X = [x * dd for x in X]
             perm = _dd_lu(X, good)

@@ -191,16 +191,16 @@ def warm_kernels() -> None:
 
 
 def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
-           keep: NDArray | None, at: NDArray | None = None, data: bool = False):
+           keep: NDArray | None, at: NDArray | None = None, data: bool = False,
+           complex_dd: bool = False):
     """Factor, solve and refine at each ω (real or complex, already checked) of ``omega[at]``
     (default all), chunk by chunk.
 
     Returns (K, error of the solve, S, S_data, x rows or None, the rows of x at ``keep``),
     NaN and inf off ``at``; S_data (:meth:`Pattern.sensitivities`) only with ``data``, NaN
-    otherwise (a sweep's error does not use it).  What does not change with ω — the
-    pattern, the solver's choice and ordering, the residual's plan — comes from
-    :func:`pattern` and :func:`solver`.  The compiled kernels serve the sparse path at real
-    ω (:func:`kernels`).
+    otherwise.  The double-double LU's retry serves real ω (complex ω with ``complex_dd``);
+    the pattern, the solver and the residual's plan come from :func:`pattern` and
+    :func:`solver`; the compiled kernels serve the sparse path at real ω (:func:`kernels`).
     """
     pat = pattern(system)
     rhs = system.injection()
@@ -236,7 +236,7 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
     chunk = solve_with.batch_chunk if kern is None and solve_with.kind == "band" \
         and solve_with.batch_chunk else min(solve_with.max_chunk, terms)
     chunk = -(-at.size // -(-at.size // chunk)) if at.size else chunk    # even shares
-    use_dd = refine and system.size <= DD_LIMIT and not np.iscomplexobj(omega)
+    use_dd = refine and system.size <= DD_LIMIT and (complex_dd or not np.iscomplexobj(omega))
     for start in range(0, at.size, chunk):
         every, r = at[start:start + chunk], None    # (the last chunk's x freed first)
         good, solve_fn = solve_with.factor(omega[every], kern)
@@ -689,7 +689,7 @@ def solve_unit(system: NodalSystem, omega: ArrayLike, *, refine: bool = True
     return cast(NDArray[np.complex128], solve(system, omega, refine=refine).x)
 
 
-def evaluate_complex(system: NodalSystem, s: ArrayLike
+def evaluate_complex(system: NodalSystem, s: ArrayLike, *, exact: bool = False
                      ) -> tuple[NDArray[np.complex128], NDArray[np.float64]]:
     """K(s) at complex frequencies s (jω on the axis) and its estimated absolute error.
 
@@ -705,6 +705,11 @@ def evaluate_complex(system: NodalSystem, s: ArrayLike
     system : NodalSystem
     s : array_like of complex
         [rad/s].
+    exact : bool
+        Off the jω axis too, where the refinement with float64 factors does not
+        converge (A(s) within rounding of singular), solve again with the
+        double-double LU, as on the axis (slower: for the few points that decide
+        whether a close pair is a mode, not for a polish's many).
 
     Returns
     -------
@@ -715,7 +720,7 @@ def evaluate_complex(system: NodalSystem, s: ArrayLike
     # On the jω axis A(s) is A(ω) at real ω = Im s: the real path (the compiled kernels
     # and the double-double LU's retry serve it).
     omega = s.imag.copy() if s.size and not s.real.any() else -1j * s
-    K, est, S, Sd, _, _ = _sweep(system, omega, True, 4, None, data=True)
+    K, est, S, Sd, _, _ = _sweep(system, omega, True, 4, None, data=True, complex_dd=exact)
     est = total_error(Sd, est + residual_rounding(system, S))
     with np.errstate(all="ignore"):
         return K, est * np.abs(K)

@@ -940,7 +940,7 @@ def _pair_verdict(system, h: complex, r: complex, where: bool = False):
     pole found within ten spacings (:func:`_mobius_pair`) say a pair after all; with
     ``where``, ``(True, zero, pole)`` then, K's own, for the polish to start from.
     """
-    K, dK = nodal.evaluate_complex(system, np.array([2 * r - h, 2 * h - r]))
+    K, dK = nodal.evaluate_complex(system, np.array([2 * r - h, 2 * h - r]), exact=True)
     with np.errstate(all="ignore"):
         if not np.all(dK <= 0.1 * np.abs(K)):
             return None
@@ -966,7 +966,7 @@ def _mobius_pair(system, h: complex, r: complex, scale: float):
     """
     u = (r - h) / abs(r - h) if r != h else 1j
     tau = np.array([-1.9, -0.6, 0.7, 1.8])
-    K, dK = nodal.evaluate_complex(system, (h + r) / 2 + scale * u * tau)
+    K, dK = nodal.evaluate_complex(system, (h + r) / 2 + scale * u * tau, exact=True)
     with np.errstate(all="ignore"):
         if not np.all(dK <= 1e-3 * np.abs(K)) or not np.all(np.isfinite(K)):
             return None
@@ -1073,7 +1073,13 @@ def _g_and_delta(system, s: np.ndarray, pole: np.ndarray):
     # Anti-resonances on the held system (built once per system): 1/K = −q there, and A
     # is singular at the root while the held matrix is not.
     systems = (system, system.memo("_held", lambda: nodal.held(system)))
-    return g_and_bound(pole, lambda i, want: nodal.evaluate_complex(systems[i], s[want]),
+    # exact: where float64 factors do not refine (a root of the other kind close by leaves
+    # A(s) nearly singular), K from the double-double LU.  Float64 refinement there gave K
+    # of no digit, or converged to a wrong K with a small estimate (the anti-resonance at
+    # 69.38 rad/s of tests/test_startup.py's corpus tree 17 came out 3.1e-13 off, said to
+    # be good to 2.1e-15).
+    return g_and_bound(pole, lambda i, want: nodal.evaluate_complex(systems[i], s[want],
+                                                                    exact=True),
                        np.isfinite(s))
 
 
@@ -1102,7 +1108,8 @@ def secant_steps(g_and_delta, admissible, s0, e0, offset, active=True, iteration
     ``g_and_delta(x)`` gives g and the bound of its error at x; ``admissible(c)``
     the step's point as it may be taken (e.g. projected on the jω axis) and
     whether it may be.  A root stops once its step is within rounding of its
-    own uncertainty; its error is then (bound of g / slope + last step).  Where
+    own uncertainty; its error is then (bound of g / slope + the last step or the Newton
+    step |g/slope| where it stopped, the longer).  Where
     the secant wandered off (to another root, or nowhere: farther than 1e-3
     relative, or no estimate) ``s0`` stands with its estimate ``e0``, but never
     below 10 Newton steps |g/g'| at ``s0`` (how far the circuit's own K says the
@@ -1126,10 +1133,11 @@ def secant_steps(g_and_delta, admissible, s0, e0, offset, active=True, iteration
         c, ok = admissible(c)
         ok &= active
         gc, dc = g_and_delta(np.where(ok, c, np.nan))     # (NaN: not evaluated, not used)
-        ok &= np.isfinite(gc)
         # On an exact zero of g its relative estimate says nothing (0·inf):
-        # the uncertainty at the previous iterate, a step away, stands.
-        dc = np.where(np.isfinite(dc), dc, db)
+        # the uncertainty at the previous iterate, a step away, stands.  Elsewhere a g
+        # with no digit known is no step: the secant stops there.
+        dc = np.where((gc == 0) & ~np.isfinite(dc), db, dc)
+        ok &= np.isfinite(gc) & np.isfinite(dc)
         step = np.where(ok, np.abs(c - b), step)
         slope = np.where(ok, sl, slope)
         a, ga = np.where(ok, b, a), np.where(ok, gb, ga)
@@ -1138,7 +1146,10 @@ def secant_steps(g_and_delta, admissible, s0, e0, offset, active=True, iteration
             done = step <= np.maximum(4 * _EPS * np.abs(b), db / np.abs(slope))
         active = ok & ~done
     with np.errstate(all="ignore"):
-        err = (db / np.abs(slope) + step) / np.abs(b)
+        # The last step, or the Newton step from where it stopped if longer: a secant that
+        # stopped by coming back to an earlier point (a zero step) far from the root (|g|
+        # large for its slope) has not converged.
+        err = (db / np.abs(slope) + np.maximum(step, np.abs(gb / slope))) / np.abs(b)
         moved = np.abs(b - s0) / np.abs(s0)
         newton = np.abs(g0 / slope0) / np.abs(s0)
     bad = ~np.isfinite(err) | ~np.isfinite(b) | (moved > 1e-3)

@@ -60,3 +60,57 @@ spring e9 n7 n1 8144.954288761449
 spring e10 n5 n3 9.170231161902271e-06
 spring e11 0 n7 1.1175355790310573e-05
 """
+
+
+#: Tree 17 of tests/test_startup.py's corpus (damped, 11 nodes): a resonance and an
+#: anti-resonance 6.2e-7 apart at 69.38 rad/s.  Its secant on K from float64 factors
+#: (A(s) nearly singular there) put the anti-resonance 3.1e-13 off, said to be good to
+#: 2.1e-15 (tests/test_resonances.py).
+CLOSE_PAIR_TREE = """drive V a 0 velocity=1.0
+spring s0 n0 0 0.002049236268152773
+damper d1 a n0 32.23456148153904
+mass m2 n2 0 681.1882619453548
+spring s3 n1 n2 5972.409326077765
+spring s4 n4 0 0.061611419738159624
+spring s5 n5 n4 39.56780892793871
+mass m6 n3 n5 1.7149822710551363
+spring s7 n1 n3 2.6384263703769584
+spring s8 n1 n3 21886.358196371555
+damper d9 a 0 3.3557154710477994
+mass m10 n8 0 0.0006419982523069722
+damper d11 n7 n8 0.006728740641891391
+mass m12 n6 n7 15337.148738591985
+mass m13 a n6 0.00011423836215521655
+spring s14 a 0 0.00027910278210491294
+spring s15 a 0 2.1273922785822597e-06
+mass m16 a 0 77.42376333917122
+damper d17 a 0 1.5611483480621373e-06
+lever L0 a 0 n1 0 ratio=8.004075118720241
+"""
+
+#: Random network 202 of mp_nodal.random_network (seed 2 of a fuzz drawing 3-8 nodes,
+#: damped or not, 0-2 levers, 2-12 decades): an overdamped resonance and anti-resonance
+#: 8.5e-10 apart at s = -7617.768 rad/s.  K off the jω axis from float64 factors had no
+#: digit there; the pair's check could not tell, and the anti-resonance's secant went to
+#: 7617.7663, 2.6e-7 off, said to be good to 2.4e-7 (tests/test_resonances.py).
+OVERDAMPED_CLOSE_PAIR = """drive V n1 0 velocity=1
+mass e0 n1 0 1.1479310005166707
+spring e1 n2 n1 6.008425097732464
+spring e2 n3 n1 12.79192050685122
+mass e3 n4 n1 0.03187044638958083
+spring e4 n5 n1 0.01280741933409984
+mass e5 n6 n5 0.19250983185397952
+mass e6 n7 n4 15.49230645607229
+mass e7 n8 n4 20.871924783917283
+mass e8 n2 0 0.029892688492283794
+spring e9 n6 0 0.03278689461540639
+spring e10 n1 n5 0.361308320640519
+spring e11 n6 n5 5.429828834801604
+damper e12 n3 n1 0.02984009193232547
+damper e13 n4 n1 0.00044192728570230963
+damper e14 n5 n1 2.8558239887174066e-05
+damper e15 n7 n4 0.12703067512025729
+damper e16 n6 0 2.4856699487485763e-05
+damper e17 n6 n5 0.018075957478127992
+lever L0 n1 0 n2 0 ratio=1.509552956783841
+"""
