@@ -708,8 +708,8 @@ def evaluate_complex(system: NodalSystem, s: ArrayLike, *, exact: bool = False
     exact : bool
         Off the jω axis too, where the refinement with float64 factors does not
         converge (A(s) within rounding of singular), solve again with the
-        double-double LU, as on the axis (slower: for the few points that decide
-        whether a close pair is a mode, not for a polish's many).
+        double-double LU, as on the axis (its cost, in Python, only at such points:
+        near a close pair of roots, as the resonances' polish and pair checks ask).
 
     Returns
     -------
