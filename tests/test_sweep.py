@@ -272,10 +272,13 @@ def _ladder_impedance(lines, w):
         else:
             shunt.setdefault(int(a[1:]), []).append((kind, float(value)))
     jw = 1j * np.asarray(w, dtype=float)
-    load = 0 * jw                                 # the admittance beyond the last node
+
+    def own(i):                                   # node i's mass and damper to the frame
+        return sum((jw * v if kind == "mass" else v + 0 * jw) for kind, v in shunt.get(i, ()))
+    load = own(len(springs)) + 0 * jw             # the last node: what is at it alone
     for i in range(len(springs) - 1, 0, -1):      # node i, spring i beyond it
         passed = 1 / (jw / springs[i] + 1 / load) if np.all(load != 0) else 0 * jw
-        load = passed + sum(jw * v if kind == "mass" else v for kind, v in shunt[i])
+        load = passed + own(i)
     return np.abs(1 / (jw / springs[0] + 1 / load))
 
 
