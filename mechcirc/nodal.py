@@ -191,15 +191,13 @@ def warm_kernels() -> None:
 
 
 def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
-           keep: NDArray | None, at: NDArray | None = None, data: bool = False,
-           complex_dd: bool = False):
+           keep: NDArray | None, at: NDArray | None = None, data: bool = False):
     """Factor, solve and refine at each ω (real or complex, already checked) of ``omega[at]``
     (default all), chunk by chunk.
 
     Returns (K, error of the solve, S, S_data, x rows or None, the rows of x at ``keep``),
     NaN and inf off ``at``; S_data (:meth:`Pattern.sensitivities`) only with ``data``, NaN
-    otherwise.  The double-double LU's retry serves real ω (complex ω with ``complex_dd``);
-    the pattern, the solver and the residual's plan come from :func:`pattern` and
+    otherwise.  The double-double LU's retry serves real and complex ω alike; the pattern, the solver and the residual's plan come from :func:`pattern` and
     :func:`solver`; the compiled kernels serve the sparse path at real ω (:func:`kernels`).
     """
     pat = pattern(system)
@@ -236,7 +234,7 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
     chunk = solve_with.batch_chunk if kern is None and solve_with.kind == "band" \
         and solve_with.batch_chunk else min(solve_with.max_chunk, terms)
     chunk = -(-at.size // -(-at.size // chunk)) if at.size else chunk    # even shares
-    use_dd = refine and system.size <= DD_LIMIT and (complex_dd or not np.iscomplexobj(omega))
+    use_dd = refine and system.size <= DD_LIMIT
     for start in range(0, at.size, chunk):
         every, r = at[start:start + chunk], None    # (the last chunk's x freed first)
         good, solve_fn = solve_with.factor(omega[every], kern)
@@ -689,7 +687,7 @@ def solve_unit(system: NodalSystem, omega: ArrayLike, *, refine: bool = True
     return cast(NDArray[np.complex128], solve(system, omega, refine=refine).x)
 
 
-def evaluate_complex(system: NodalSystem, s: ArrayLike, *, exact: bool = False
+def evaluate_complex(system: NodalSystem, s: ArrayLike
                      ) -> tuple[NDArray[np.complex128], NDArray[np.float64]]:
     """K(s) at complex frequencies s (jω on the axis) and its estimated absolute error.
 
@@ -697,7 +695,11 @@ def evaluate_complex(system: NodalSystem, s: ArrayLike, *, exact: bool = False
     refined with residuals in double-double as in :func:`solve`, and the
     error is the same estimate (the last correction, the residual's own
     rounding and the sensitivity to rounding the data, eps × Σ|x_r a_rc x_c|):
-    used to polish resonances on the circuit's own K.  NaN where A(s) is
+    used to polish resonances on the circuit's own K.  Where float64 factors do
+    not refine (A(s) within rounding of singular: a root of the other kind close
+    by), the double-double LU solves again, off the jω axis as on it: float64
+    refinement there gave K of no digit, or a wrong K with a small estimate (an
+    anti-resonance 3.1e-13 off, said to be good to 2.1e-15).  NaN where A(s) is
     singular.
 
     Parameters
@@ -705,11 +707,6 @@ def evaluate_complex(system: NodalSystem, s: ArrayLike, *, exact: bool = False
     system : NodalSystem
     s : array_like of complex
         [rad/s].
-    exact : bool
-        Off the jω axis too, where the refinement with float64 factors does not
-        converge (A(s) within rounding of singular), solve again with the
-        double-double LU, as on the axis (its cost, in Python, only at such points:
-        near a close pair of roots, as the resonances' polish and pair checks ask).
 
     Returns
     -------
@@ -720,7 +717,7 @@ def evaluate_complex(system: NodalSystem, s: ArrayLike, *, exact: bool = False
     # On the jω axis A(s) is A(ω) at real ω = Im s: the real path (the compiled kernels
     # and the double-double LU's retry serve it).
     omega = s.imag.copy() if s.size and not s.real.any() else -1j * s
-    K, est, S, Sd, _, _ = _sweep(system, omega, True, 4, None, data=True, complex_dd=exact)
+    K, est, S, Sd, _, _ = _sweep(system, omega, True, 4, None, data=True)
     est = total_error(Sd, est + residual_rounding(system, S))
     with np.errstate(all="ignore"):
         return K, est * np.abs(K)

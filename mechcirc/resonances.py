@@ -940,7 +940,7 @@ def _pair_verdict(system, h: complex, r: complex, where: bool = False):
     pole found within ten spacings (:func:`_mobius_pair`) say a pair after all; with
     ``where``, ``(True, zero, pole)`` then, K's own, for the polish to start from.
     """
-    K, dK = nodal.evaluate_complex(system, np.array([2 * r - h, 2 * h - r]), exact=True)
+    K, dK = nodal.evaluate_complex(system, np.array([2 * r - h, 2 * h - r]))
     with np.errstate(all="ignore"):
         if not np.all(dK <= 0.1 * np.abs(K)):
             return None
@@ -966,7 +966,7 @@ def _mobius_pair(system, h: complex, r: complex, scale: float):
     """
     u = (r - h) / abs(r - h) if r != h else 1j
     tau = np.array([-1.9, -0.6, 0.7, 1.8])
-    K, dK = nodal.evaluate_complex(system, (h + r) / 2 + scale * u * tau, exact=True)
+    K, dK = nodal.evaluate_complex(system, (h + r) / 2 + scale * u * tau)
     with np.errstate(all="ignore"):
         if not np.all(dK <= 1e-3 * np.abs(K)) or not np.all(np.isfinite(K)):
             return None
@@ -1073,13 +1073,7 @@ def _g_and_delta(system, s: np.ndarray, pole: np.ndarray):
     # Anti-resonances on the held system (built once per system): 1/K = −q there, and A
     # is singular at the root while the held matrix is not.
     systems = (system, system.memo("_held", lambda: nodal.held(system)))
-    # exact: where float64 factors do not refine (a root of the other kind close by leaves
-    # A(s) nearly singular), K from the double-double LU.  Float64 refinement there gave K
-    # of no digit, or converged to a wrong K with a small estimate (the anti-resonance at
-    # 69.38 rad/s of tests/test_startup.py's corpus tree 17 came out 3.1e-13 off, said to
-    # be good to 2.1e-15).
-    return g_and_bound(pole, lambda i, want: nodal.evaluate_complex(systems[i], s[want],
-                                                                    exact=True),
+    return g_and_bound(pole, lambda i, want: nodal.evaluate_complex(systems[i], s[want]),
                        np.isfinite(s))
 
 
