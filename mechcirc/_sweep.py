@@ -651,9 +651,11 @@ def peak(result: "Sweep | Circuit", omega_min: float | None = None,
         The band [rad/s] (needed with a circuit).
     quantity : {"Q0", "v0", "K", "S"}, optional
         ``"S"`` (1/K) gives the smallest |K| as 1/value.  Default: ``"Q0"`` for a velocity drive, ``"v0"`` for a force drive.
-    resonances : list of Resonance, optional
+    resonances : list of Resonance or MechcircError, optional
         The circuit's resonances up to at least the band's top, when already
-        computed (otherwise :meth:`Circuit.resonances` is called).
+        computed (otherwise :meth:`Circuit.resonances` is called); or the error
+        that asking for them raised (then they are not asked for again: the
+        search is the grid's, with :attr:`Peak.note`, as below).
     xtol : float
         Relative tolerance in ω of the golden-section search (also to 1e-9 of
         each bracket, :func:`golden_max`).  |q| is flat at its maximum, so the
@@ -766,6 +768,8 @@ def _peak_roots(circuit, lo: float, hi: float, quantity: str, resonances) -> tup
     K — from ``resonances`` when given, else computed; and ``""``, or why they could not
     be computed (then no roots: the search is the grid's)."""
     kind = "resonance" if quantity in ("Q0", "S") else "antiresonance"
+    if isinstance(resonances, MechcircError):       # asked for already, and refused
+        return [], _grid_only(resonances)
     if resonances is not None:
         return [r for r in resonances if r.kind == kind and lo * (1 - 1e-12) <= r.omega
                 and r.omega <= hi * (1 + 1e-9)], ""
@@ -774,8 +778,13 @@ def _peak_roots(circuit, lo: float, hi: float, quantity: str, resonances) -> tup
         return [r for r in circuit.resonances(omega_max=hi * (1 + 1e-9), kind=kind)
                 if lo * (1 - 1e-12) <= r.omega], ""
     except MechcircError as exc:    # e.g. more roots in the band than the band solver takes
-        return [], (f"searched around the grid's largest value only, a narrow peak between "
-                    f"two grid points may be missed: the resonances were not found ({exc})")
+        return [], _grid_only(exc)
+
+
+def _grid_only(exc: MechcircError) -> str:
+    """:attr:`Peak.note` where the resonances could not be found (``exc`` says why)."""
+    return (f"searched around the grid's largest value only, a narrow peak between "
+            f"two grid points may be missed: the resonances were not found ({exc})")
 
 
 def _peak_search(circuit, method, quantity, lo, hi, brackets, best_value, best_omega, xtol,

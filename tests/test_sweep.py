@@ -7,6 +7,7 @@ what decides the check.
 """
 
 import functools
+import json
 import math
 import pickle
 import warnings
@@ -318,6 +319,45 @@ def test_peak_says_when_it_could_only_search_the_grid():
             p = s.peak()
     assert "narrow peak between two grid points may be missed" in p.note
     assert p.note in str(p)
+
+
+_DAMPED = "mass m1 a 0 2\nspring k1 a 0 800\ndamper c1 a 0 3\ndrive V a 0 velocity=0.1\n"
+
+
+def test_peak_told_the_resonances_were_refused_does_not_ask_again(monkeypatch):
+    """``peak(resonances=exc)``: the error the caller got when it asked for the
+    resonances (the CLI, for its markers) gives the grid-only search and its note at
+    once.  Before, the CLI's --plot and --json asked twice (2.4 s each to be refused
+    at 2,999 elements)."""
+    c = mechcirc.parse(_DAMPED)
+    s = c.sweep(np.geomspace(1, 1e3, 101))
+    monkeypatch.setattr(type(c), "resonances", lambda *a, **k: pytest.fail("asked again"))
+    refused = mechcirc.errors.SolverError("71 roots in the band, the band solver takes 64")
+    with pytest.warns(mechcirc.errors.PeakAccuracyWarning, match="grid's largest value"):
+        p = peak(s, resonances=refused)
+    assert "the resonances were not found (71 roots in the band" in p.note
+    assert p.value >= p.grid_value
+
+
+def test_cli_asks_for_the_resonances_once_when_they_are_refused(monkeypatch, capsys, tmp_path):
+    """--json needs them for its markers and for the peak: one refusal serves both."""
+    from mechcirc import cli
+    from mechcirc.circuit import Circuit
+
+    calls = []
+
+    def refuse(self, *a, **k):
+        calls.append(k)
+        raise mechcirc.errors.SolverError("71 roots in the band, the band solver takes 64")
+
+    monkeypatch.setattr(Circuit, "resonances", refuse)
+    path = tmp_path / "damped.mcir"
+    path.write_text(_DAMPED)
+    status = cli.main(["sweep", str(path), "--omega-min", "1", "--omega-max", "1e3",
+                       "--points", "50", "--json"])
+    doc = json.loads(capsys.readouterr().out)
+    assert status == 0 and len(calls) == 1
+    assert "the resonances were not found (71 roots" in doc["peak"]["note"]
 
 
 # ---------------------------------------------------------------------------

@@ -258,7 +258,9 @@ def cmd_sweep(args) -> int:
             everything = circuit.resonances(omega_max=omega[-1] * (1 + 1e-9))
         except SolverError as exc:      # too large for the eigenproblem: sweep anyway
             warns.append(f"resonance markers left out: {exc}")
-    found = [r for r in everything or () if omega[0] <= r.omega <= omega[-1]]
+            everything = exc            # (peak() is told, not made to ask again)
+    found = [r for r in everything or () if omega[0] <= r.omega <= omega[-1]] \
+        if isinstance(everything, list) else []
     # (sweep_sensitivity imported above, where the names were checked)
     sens = sweep_sensitivity(circuit, result.omega, args.sensitivity) if args.sensitivity else None
     from .._sweep import FLAG_SINGULAR, peak

@@ -147,6 +147,36 @@ def inverse_K(spec, s, dps: int = 40):
         return -mpmath.lu_solve(B, e)[n]
 
 
+def det_root(spec, s0, pole: bool, dps: int = 40) -> complex:
+    """The pole of K (``pole``) or its zero nearest the start s0, as a zero of a determinant.
+
+    K = cᵀA⁻¹c is −det B / det A with B = [[A, c], [cᵀ, 0]]: its poles are the zeros of
+    det A, its zeros those of det B.  A zero of K and a pole closer than the secant's
+    first step (network 280 of seed 3: 1e-11 apart) cancel in K and in 1/K, so
+    :func:`root` leaves for another root; each determinant has only its own.  Each is
+    scaled by its value at s0·(1 + 1e-6), so that mpmath's check of |f| at the root
+    does not depend on the units."""
+    mats, c = _matrices(spec, dps)
+    n = c.rows
+    with mpmath.workdps(dps):
+        def det(s):
+            A = mats["damper"] + mats["lever"] + s * mats["mass"] + mats["spring"] / s
+            if not pole:
+                B = mpmath.zeros(n + 1, n + 1)
+                for i in range(n):
+                    for j in range(n):
+                        B[i, j] = A[i, j]
+                    B[i, n] = B[n, i] = c[i]
+                A = B
+            return mpmath.det(A)
+
+        x0 = mpmath.mpc(s0)
+        scale = det(x0 * (1 + mpmath.mpf(10) ** -6))
+        return complex(mpmath.findroot(lambda s: det(s) / scale,
+                                       (x0, x0 * (1 + mpmath.mpf(10) ** -12)),
+                                       tol=mpmath.mpf(10) ** (-dps)))
+
+
 def root(spec, s0, pole: bool, dps: int = 40) -> complex:
     """The zero of K (or of 1/K if ``pole``) nearest the start s0, by mpmath.findroot.
 
