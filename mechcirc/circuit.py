@@ -39,7 +39,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._memo import Memos
-from .errors import NetlistError, unknown_name
+from .errors import NetlistError, NotSeriesParallelError, unknown_name
 
 if TYPE_CHECKING:  # pragma: no cover - annotations of the delegates only
     from .motion_laws import Motion
@@ -375,8 +375,15 @@ class Circuit(Memos):
 
     @property
     def unloaded(self) -> tuple[str, ...]:
-        """Names of elements on no path between the drive terminals (they carry no force)."""
-        return self._reduction.unloaded
+        """Names of elements on no path between the drive terminals (they carry no force).
+
+        From the series–parallel reduction, or from the nodal system's loaded part
+        where the network is not series–parallel (a bridge, a lever across meshes).
+        """
+        try:
+            return self._reduction.unloaded
+        except NotSeriesParallelError:
+            return self.nodal.unloaded
 
     @cached_property
     def nodal(self) -> NodalSystem:

@@ -120,6 +120,30 @@ spring island2 q p 5
     assert c.unloaded == ("dangling", "island1", "island2")
 
 
+def test_unloaded_of_a_network_that_is_not_series_parallel():
+    """``Circuit.unloaded`` is a question of topology: a lever across meshes makes the
+    network nodal-only, and the property raised NotSeriesParallelError (found by a
+    fuzz of mode sensitivities).  Now the nodal system's loaded part answers, the same
+    as a series-parallel network's reduction where both apply."""
+    text = """drive V n1 0 velocity=1
+mass e0 n1 0 0.33
+spring e1 n2 n1 7.0
+mass e2 n3 n1 1.34
+mass e3 n4 n1 4.5
+spring e4 0 n4 5.5
+spring e5 0 n1 0.11
+lever L0 n4 0 n2 0 ratio=0.0166
+"""
+    c = mechcirc.parse(text)
+    with pytest.raises(mechcirc.errors.NotSeriesParallelError):
+        c.tree
+    assert c.unloaded == ("e2",)
+    # With a spring for the lever the network reduces, and the reduction says the same.
+    with pytest.warns(UnloadedElementWarning, match=": e2$"):
+        sp = mechcirc.parse(text.replace("lever L0 n4 0 n2 0 ratio=0.0166", "spring e6 n2 0 3"))
+        assert str(sp.tree) and sp.unloaded == ("e2",) == sp.nodal.unloaded
+
+
 def test_bridge_is_not_series_parallel_and_names_the_culprits():
     text = """drive V a 0 velocity=1
 spring k1 a b 1

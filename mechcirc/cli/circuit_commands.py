@@ -118,10 +118,10 @@ def _register_resonances(sub) -> None:
 def _tree_and_unloaded(circuit) -> tuple[str, tuple[str, ...]]:
     """The reduction tree as text and the unloaded elements, from the method that applies."""
     try:
-        return str(circuit.tree), circuit.unloaded
+        tree = str(circuit.tree)
     except NotSeriesParallelError as exc:
-        return (f"(not series–parallel: {exc.message}; nodal analysis is used)",
-                circuit.nodal.unloaded)
+        tree = f"(not series–parallel: {exc.message}; nodal analysis is used)"
+    return tree, circuit.unloaded
 
 
 def cmd_check(args) -> int:
