@@ -355,9 +355,14 @@ def test_cli_asks_for_the_resonances_once_when_they_are_refused(monkeypatch, cap
     path.write_text(_DAMPED)
     status = cli.main(["sweep", str(path), "--omega-min", "1", "--omega-max", "1e3",
                        "--points", "50", "--json"])
-    doc = json.loads(capsys.readouterr().out)
+    out, err = capsys.readouterr()
+    doc = json.loads(out)
     assert status == 0 and len(calls) == 1
     assert "the resonances were not found (71 roots" in doc["peak"]["note"]
+    # Said once among the warnings (the markers), not again as a peak warning line.
+    assert [w for w in doc["warnings"] if "71 roots" in w] == [
+        "resonance markers left out: 71 roots in the band, the band solver takes 64"]
+    assert err.count("71 roots") == 1, err
 
 
 # ---------------------------------------------------------------------------
@@ -399,7 +404,8 @@ def test_cli_names_singular_points_and_the_peak(tmp_path, capsys):
     path.write_text(POLE)
     assert cli.main(["sweep", str(path), "--omega-min", "50", "--omega-max", "150",
                      "--points", "3", "--json"]) == 0
-    doc = json.loads(capsys.readouterr().out)
+    out, err = capsys.readouterr()
+    doc = json.loads(out)
     assert doc["singular_omega"] == [100.0] and doc["flags"] == [0, 1, 0]
     # |Q0| = |ω − 1e4/ω| on [50, 150]: largest at ω = 50, 150 N (closed form).
     assert doc["peak"]["value"] == pytest.approx(150.0, rel=1e-12)

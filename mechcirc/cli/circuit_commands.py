@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import argparse
 import math
+import warnings
 from pathlib import Path
 
-from ..errors import MechcircError, NotSeriesParallelError, SolverError
+from ..errors import MechcircError, NotSeriesParallelError, PeakAccuracyWarning, SolverError
 from ..limits import (
     MAX_ADAPTIVE_NODAL_POINTS,
     MAX_ADAPTIVE_POINTS,
@@ -265,7 +266,9 @@ def cmd_sweep(args) -> int:
     sens = sweep_sensitivity(circuit, result.omega, args.sensitivity) if args.sensitivity else None
     from .._sweep import FLAG_SINGULAR, peak
 
-    pk = peak(result, resonances=everything)
+    with warnings.catch_warnings():     # (its note is in the peak line and the JSON)
+        warnings.simplefilter("ignore", PeakAccuracyWarning)
+        pk = peak(result, resonances=everything)
     singular = [float(w) for w in result.omega[result.flags == FLAG_SINGULAR]]
     notes = list(getattr(result, "notes", ()))
     if singular:
