@@ -391,7 +391,7 @@ class Circuit(Memos):
         from .nodal import assemble, require_nonsingular
 
         system = assemble(self)
-        require_nonsingular(system)
+        require_nonsingular(system, self.source)
         return system
 
     def sweep(self, omega: ArrayLike, method: Method = "auto", *, refine: bool = True,

@@ -781,8 +781,10 @@ def element_response(system: NodalSystem, omega: ArrayLike, scale: NDArray, *,
 
 
 
-def require_nonsingular(system: NodalSystem) -> None:
-    """Raise if A(ω) is singular at every frequency (checked at two generic ω).
+def require_nonsingular(system: NodalSystem, source: str | None = None) -> None:
+    """Raise if A(ω) is singular at every frequency (checked at two generic ω), or if
+    the levers hold the drive's nodes together (K = 0 at every ω; ``source``, the
+    netlist's name, locates that error at the first lever to blame).
 
     Dense systems are first judged by the smallest singular value of the
     matrix, as it is and then balanced (:func:`_balance`; balancing only
@@ -805,6 +807,8 @@ def require_nonsingular(system: NodalSystem) -> None:
         raise TopologyError(
             "nothing between the drive's nodes carries force (no unknowns left; unloaded: "
             f"{', '.join(system.unloaded[:12]) or 'none'})", elements=system.unloaded)
+    if system.levers:
+        _require_drive_free(system, source)
     values = pattern(system).e_val
     if not system.levers and ((values > 0) & (values < np.inf)).all():
         return
@@ -834,6 +838,80 @@ def require_nonsingular(system: NodalSystem) -> None:
         f"are not determined): {', '.join(culprits[:12])}; check for levers in parallel "
         "or nodes tied only by levers", nodes=[c for c in culprits if not c.startswith("lever")],
         elements=[c[6:] for c in culprits if c.startswith("lever")])
+
+
+#: Most levers :func:`_require_drive_free` judges (those linked to the drive's nodes
+#: through shared nodes; a dense SVD of theirs): beyond, the sweep's flags speak.
+LOCK_DENSE_LEVERS = 2000
+
+
+def _require_drive_free(system: NodalSystem, source: str | None = None) -> None:
+    """Raise where the levers alone hold the drive's nodes together: K = 0 at every ω.
+
+    The levers' rows G x = 0 (x the node velocities) fix x_a − x_b = cᵀx when c lies
+    in the row space of G: two levers between the same nodes at ratios that do not
+    agree, or a lever from the drive onto itself.  No force then moves the drive,
+    whatever the masses, springs and dampers; the solve gave K of a few units of
+    rounding (|Q0| of 1e67 N "located", random network 32 of seed 2) or a resonance
+    that is not there (levers in parallel at ratios 2 and 3).  Judged on the levers
+    linked to the drive's nodes, G balanced by powers of 2 (ratios span up to 600
+    decades): c is in its row space when appending c does not raise the numerical
+    rank (singular values above 10·max(shape)·u·σ_max).
+    """
+    n, k = len(system.nodes), len(system.levers)
+    rows, cols, vals = (np.asarray(a) for a in system.stamps["lever"])
+    keep = (rows >= n) & (cols < n) & (vals != 0)
+    rows, cols, vals = rows[keep] - n, cols[keep], vals[keep]
+    ends = [i for i in (system.a, system.b) if i >= 0]
+    levers = _levers_linked(rows.tolist(), cols.tolist(), ends, k)
+    if not levers or len(levers) > LOCK_DENSE_LEVERS:
+        return
+    pick = np.isin(rows, levers)
+    nodes = np.unique(np.concatenate([cols[pick], ends]))
+    G = np.zeros((len(levers), nodes.size))
+    np.add.at(G, (np.searchsorted(levers, rows[pick]), np.searchsorted(nodes, cols[pick])),
+              vals[pick])
+    c = system.injection()[nodes]
+    if not np.isfinite(G).all():
+        return                          # (values beyond float64: the trial solves judge)
+    for _ in range(4):                  # rows, then columns, to a largest |entry| in [1, 2)
+        G = np.ldexp(G, -np.frexp(np.abs(G).max(axis=1, keepdims=True))[1] + 1)
+        e = -np.frexp(np.abs(G).max(axis=0, keepdims=True))[1] + 1
+        e[np.abs(G).max(axis=0, keepdims=True) == 0] = 0
+        G, c = np.ldexp(G, e), np.ldexp(c, e[0])
+    both = np.vstack([G, c / np.abs(c).max()])
+    if _numerical_rank(both) > _numerical_rank(G):
+        return
+    y = np.abs(np.linalg.lstsq(G.T, c, rcond=None)[0])     # (the levers that hold it)
+    held = [system.levers[i] for i, yi in zip(levers, y) if yi > 1e-8 * y.max()]
+    raise TopologyError(
+        f"the lever(s) {', '.join(lv.name for lv in held[:12])} hold the drive's two nodes "
+        "together: K = 0 at every frequency, no force moves the drive (check those "
+        "levers' ratios and sides)", nodes=[system.nodes[i] for i in ends],
+        elements=[lv.name for lv in held],
+        location=f"{source}:{held[0].line}:1" if source and held[0].line else None)
+
+
+def _levers_linked(rows: list, cols: list, ends: list, k: int) -> list[int]:
+    """The levers (sorted) reached from the nodes ``ends`` through the nodes levers share."""
+    by_node: dict[int, list[int]] = {}
+    nodes_of: list[list[int]] = [[] for _ in range(k)]
+    for r, c in zip(rows, cols):
+        by_node.setdefault(c, []).append(r)
+        nodes_of[r].append(c)
+    seen_nodes, found, todo = set(ends), set(), list(ends)
+    while todo:
+        for lv in by_node.get(todo.pop(), ()):
+            if lv not in found:
+                found.add(lv)
+                todo.extend(x for x in nodes_of[lv] if x not in seen_nodes)
+                seen_nodes.update(nodes_of[lv])
+    return sorted(found)
+
+
+def _numerical_rank(A) -> int:
+    sv = np.linalg.svd(A, compute_uv=False)
+    return int(np.count_nonzero(sv > 10 * max(A.shape) * np.finfo(float).eps * sv[0]))
 
 
 def _dense_verdict(system: NodalSystem, trial):

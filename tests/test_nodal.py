@@ -823,3 +823,52 @@ def test_k_off_the_axis_between_a_close_pair_from_the_double_double_lu():
                                            mpmath.mpf(x), 50)) for x in s])
     K, dK = mechcirc.nodal.evaluate_complex(system, s)
     assert np.all(np.abs(K - ref) <= dK) and np.all(dK <= 1e-5 * np.abs(ref))
+
+
+#: Random network 32 of tests/fuzz/numeric_run.py's peak campaign (seed 2): levers L0 and
+#: L1 join n1 and n2 both ways at ratios whose product is 0.28, so v1 = v2 = 0.
+HELD_BY_TWO_LEVERS = """drive V n1 0 velocity=1
+mass e0 n1 0 0.819016511074705
+spring e1 n2 0 0.016588137500111094
+spring e2 n3 n1 67.31315891088488
+spring e3 n3 n1 0.2840930325175765
+damper e4 n3 n1 0.004016295703249738
+lever L0 n1 0 n2 0 ratio=24.868034660382293
+lever L1 n2 0 n1 0 ratio=0.011161166144608235
+"""
+
+
+@pytest.mark.filterwarnings("ignore::mechcirc.errors.UnloadedElementWarning")
+@pytest.mark.parametrize("text, levers, line", [
+    (HELD_BY_TWO_LEVERS, ("L0", "L1"), 7),
+    # Levers in parallel at ratios 2 and 3: v_b = 2 v_a = 3 v_a.  Before, the sweep
+    # found an undamped resonance at 4.33 rad/s that is not there.
+    ("drive V a 0 velocity=1\nmass m a 0 1\nspring k a b 10\nlever L1 a 0 b 0 ratio=2\n"
+     "lever L2 a 0 b 0 ratio=3\n", ("L1", "L2"), 4),
+])
+def test_levers_that_hold_the_drive_are_named(text, levers, line):
+    """K = 0 at every ω (mpmath, 50 digits: exactly 0 at two ω); the sweep gave |Q0| of
+    1e50–1e67 N flagged "no digit", and a peak of 1.06e67 N "located".  Now nodal
+    analysis refuses such a network, naming the levers at the first one's line."""
+    spec = mp_nodal.spec_of(text)
+    assert [mp_nodal.K(spec, 1j * w, 50) for w in (0.37, 5.3)] == [0, 0]
+    c = mechcirc.parse(text, source="held.mcir")
+    with pytest.raises(TopologyError, match="hold the drive's two nodes together") as exc:
+        c.sweep([1.0])
+    assert exc.value.elements == levers and exc.value.location == f"held.mcir:{line}:1"
+    with pytest.raises(TopologyError, match="hold the drive's two nodes"):
+        c.resonances()
+
+
+@pytest.mark.parametrize("ratio", [1e-150, 1e-8, 1.0, 1e8, 1e150])
+def test_levers_that_agree_do_not_hold_the_drive(ratio):
+    """Two levers a→b at r and b→a at 1/r (the product rounded to 1 or not) state one
+    constraint, and a lever of ratio 1e±150 does not hold its primary however far
+    the balance of its row: not refused as a held drive (lever forces left
+    undetermined by the pair are the other refusal, "singular at every frequency")."""
+    one = f"drive V a 0 velocity=1\nlever L a 0 b 0 ratio={ratio!r}\nmass m b 0 2\n"
+    assert np.isfinite(mechcirc.parse(one).sweep([1.0], method="nodal").K).all()
+    pair = one + f"lever L2 b 0 a 0 ratio={1 / ratio!r}\n"
+    with pytest.raises(TopologyError) as exc:
+        mechcirc.parse(pair).sweep([1.0], method="nodal")
+    assert "hold the drive" not in str(exc.value)

@@ -83,7 +83,9 @@ def test_huge_masses_give_the_value_of_the_rigid_chain():
 
 def test_lever_from_the_drive_onto_itself_holds_the_drive():
     """Lever n3–n4 → n4–n3, ratio 1: v4 − v3 = v3 − v4, so v4 = v3: the drive is held
-    rigidly and K = 0 exactly (by nodal analysis: the tree refuses the lever).  (Its clique holds the pairs
+    rigidly, K = 0 at every ω (the tree refuses the lever).  Nodal analysis gave that
+    K = 0; it now says so before solving, naming the lever and its line, as for any
+    levers that hold the drive (tests/test_nodal.py).  (Its clique holds the pairs
     (n3, n3) and (n4, n4), which couple nothing; networkx put such self-loops
     into whichever block its search had open, and the lever was once dropped
     as unloaded, giving "nothing between the drive's nodes".)"""
@@ -91,7 +93,10 @@ def test_lever_from_the_drive_onto_itself_holds_the_drive():
             "drive V n4 n3 force=1\n")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        assert mechcirc.parse(text).sweep([1.0, 7.0]).K.tolist() == [0, 0]
+        with pytest.raises(TopologyError, match="L0 hold the drive's two nodes together") \
+                as exc:
+            mechcirc.parse(text).sweep([1.0, 7.0])
+    assert exc.value.location == "<string>:2:1" and exc.value.elements == ("L0",)
 
 
 def test_series_of_terms_that_are_all_exactly_zero_is_zero_not_a_crash():
