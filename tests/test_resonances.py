@@ -341,6 +341,27 @@ def test_a_pair_1e_11_apart_is_within_its_errors_of_the_determinants_zeros():
     assert abs(abs(away) / r.omega - 1) > 0.5
 
 
+def test_lever_projection_that_cancels_is_in_the_undamped_bound():
+    """Random network 131 of ``tests/fuzz/numeric_run.py roots`` (seed 3): the levers
+    move n3 and n1 almost together (x3/x1 = 1/0.9346), so the stiff spring e3's
+    stretch is 1.07 − 1 and Zᵀ Kₛ Z came out 400 times smaller than the bound of its
+    rounding.  The root straight from the eigen-solve was 6 ulps off (1.35e-15) with
+    an error of 4 ulps (8.9e-16); the bound now carries the product's growth (3.6e-13),
+    so the root is polished on K."""
+    text = """drive V n1 0 velocity=1
+mass e0 n1 0 0.023790670066019762
+spring e1 n2 n1 0.0010603173483819336
+spring e2 n3 n2 43.42505205379317
+spring e3 n3 n1 6281.8953844775715
+lever L0 n2 0 n1 0 ratio=6.127350032381396
+lever L1 n3 0 n1 0 ratio=0.9346431748466649
+"""
+    (r,) = mechcirc.parse(text).resonances()
+    exact = mp_nodal.det_root(mp_nodal.spec_of(text), 1j * r.omega, True)
+    assert abs(abs(exact) - r.omega) <= r.error * abs(exact), (r, exact)
+    assert r.error < 1e-13
+
+
 def test_weakly_coupled_pair_of_the_damped_ladder_is_reported():
     """The 45-element ladder's mode at 516.08 rad/s is seen from the drive only weakly:
     K has its zero and pole 3.0e-11 apart (relative), 4 000 times their estimates (about
