@@ -362,6 +362,43 @@ lever L1 n3 0 n1 0 ratio=0.9346431748466649
     assert r.error < 1e-13
 
 
+#: Random network 231 of ``tests/fuzz/numeric_run.py roots`` (seed 4): an overdamped mode
+#: at s = −1.79e10 rad/s that the drive does not see (det A and det [[A, c], [cᵀ, 0]]
+#: share the zero), found by both eigen-problems 3.8e-6 apart.
+UNSEEN_OVERDAMPED_MODE = """drive V n1 0 velocity=1
+mass e0 n1 0 30.04884163961049
+spring e1 n2 n1 6319.994532757647
+spring e2 n3 0 2.9869757393674212
+spring e3 n4 n1 0.00020877484297315927
+mass e4 n5 n4 1968.4601258637829
+spring e5 n6 n4 29.74555658704162
+spring e6 n7 n3 0.007118321014702241
+mass e7 n2 n4 0.38444297721425685
+mass e8 n6 0 1.0475622887901794
+spring e9 n3 n5 9.932823706134332
+damper e10 n1 0 0.03388347305972192
+damper e11 n4 n1 3.545714495957508e-07
+damper e12 n7 n3 2.2044074215615066e-05
+damper e13 n6 0 0.0034700622624771332
+"""
+
+
+def test_a_root_k_does_not_confirm_keeps_no_small_error():
+    """The resonance's secant started where K had no digit (1e18, bound inf: A is
+    singular at a mode in both problems), took a slope of 1e17 from it and "converged"
+    1e-9 from the determinants' zero with an error of 2.2e-16.  A start without a digit
+    is no secant point now: K (−1.86e-12 to 8 digits around s0, mpmath) confirms no
+    root there, and the root keeps an infinite error.  Every root is within its error
+    of the zero of det A (anti-resonances) or det [[A, c], [cᵀ, 0]] (resonances)."""
+    spec = mp_nodal.spec_of(UNSEEN_OVERDAMPED_MODE)
+    found = mechcirc.parse(UNSEEN_OVERDAMPED_MODE).resonances()
+    for r in found:
+        z = mp_nodal.det_root(spec, complex(-r.zeta * r.omega, r.omega_d),
+                              r.kind == "antiresonance")
+        assert abs(abs(z) - r.omega) <= r.error * abs(z), (r, z)
+    assert [r.error for r in found if r.omega > 1e9 and r.kind == "resonance"] == [np.inf]
+
+
 def test_weakly_coupled_pair_of_the_damped_ladder_is_reported():
     """The 45-element ladder's mode at 516.08 rad/s is seen from the drive only weakly:
     K has its zero and pole 3.0e-11 apart (relative), 4 000 times their estimates (about
