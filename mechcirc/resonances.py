@@ -1170,6 +1170,15 @@ def secant_steps(g_and_delta, admissible, s0, e0, offset, active=True, iteration
         with np.errstate(all="ignore"):
             done = step <= np.maximum(4 * _EPS * np.abs(b), db / np.abs(slope))
         active = ok & ~done
+    return _secant_outcome(s0, e0, (b, gb, db, step, slope), (g0, slope0, known))
+
+
+def _secant_outcome(s0, e0, last, start) -> tuple:
+    """(s, relative error) of :func:`secant_steps` once it stopped: ``last`` = (b, g(b),
+    its bound, the last step, the slope), ``start`` = (g(s0), the first slope, whether g
+    was known at both starting points)."""
+    b, gb, db, step, slope = last
+    g0, slope0, known = start
     with np.errstate(all="ignore"):
         # The last step, or the Newton step from where it stopped if longer: a secant that
         # stopped by coming back to an earlier point (a zero step) far from the root (|g|
