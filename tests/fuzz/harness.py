@@ -495,6 +495,57 @@ def cli_argv(rng: random.Random, workdir: Path, files: list[str],
     return argv
 
 
+def api_network(seed: int) -> str:
+    """A valid random network (:func:`reference.mp_nodal.random_network`: meshes, levers,
+    values over 1–10 decades), with a force drive or a ``.param`` now and then."""
+    from reference import mp_nodal
+
+    rng = np.random.default_rng(seed)
+    text, _, _ = mp_nodal.random_network(
+        rng, n_nodes=int(rng.integers(2, 7)), damped=bool(rng.random() < 0.6),
+        levers=int(rng.integers(0, 3)), decades=float(rng.uniform(1, 10)))
+    if rng.random() < 0.3:
+        text = text.replace("drive V n1 0 velocity=1", "drive F n1 0 force=2")
+    if rng.random() < 0.3:                  # the first element's value as a .param
+        lines = text.splitlines()
+        words = lines[1].split()
+        lines[1:2] = [f".param p0={words[4]}", " ".join(words[:4] + ["{p0}"])]
+        text = "\n".join(lines) + "\n"
+    return text
+
+
+def api_property(text: str) -> str:
+    """Every public analysis of a valid network ends in a result or a MechcircError:
+    sweeps (both methods, unrefined, with bounds), element forces and velocities,
+    resonances, modes, the three kinds of peak, the adaptive sweep, sensitivities,
+    ``unloaded``, scikit-rf, simplify, a two-port, and designs of a ``.param``."""
+    from mechcirc.modes import sweep_sensitivity
+
+    c = mechcirc.parse(text)
+    scale = np.sqrt(np.median([e.value for e in c.elements if e.kind == "spring"] or [1.0]) /
+                    np.median([e.value for e in c.elements if e.kind == "mass"] or [1.0]))
+    lo, hi = scale / 1e3, scale * 1e3
+    w = np.geomspace(lo, hi, 50)
+    last = c.elements[-1]
+    calls = [
+        lambda: c.sweep(w), lambda: c.sweep(w, method="nodal", refine=False),
+        lambda: c.sweep(w, error=True).error,
+        lambda: [(s.force(e.name), s.velocity(e.name))
+                 for s in [c.sweep(w[:3])] for e in c.elements],
+        lambda: c.resonances(hi), lambda: c.modes(hi), lambda: c.unloaded,
+        *(functools.partial(mechcirc.peak, c, lo, hi, q) for q in (None, "K", "S")),
+        lambda: mechcirc.adaptive_sweep(c, lo, hi, max_points=400),
+        lambda: sweep_sensitivity(c, w[:5]), lambda: c.sweep(w[:5]).to_skrf(),
+        lambda: mechcirc.simplify(c, (lo * 10, hi / 10), 0.01),
+        lambda: c.two_port("n1", "0", last.n1, last.n2 if last.n2 != last.n1 else "0", w[:5]),
+    ]
+    if c.params:
+        calls.append(lambda: mechcirc.designs(c, {"p0": np.array([1.0, 2.0]) * c.params["p0"]})
+                     .sweep(w[:5]))
+    outcomes = [run_target(call, None, seconds=30.0) for call in calls]
+    return "error" if "error" in outcomes else "result"
+
+
 def cli_property(argv: list[str], *, seconds: float = 20.0) -> str:
     """``main(argv)`` ends with exit 0 or 2 (argparse's own exits included), never 1 or a traceback."""
     from mechcirc.cli import main

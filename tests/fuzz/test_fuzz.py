@@ -5,7 +5,7 @@ run (≥ 100,000 inputs) is ``tests/fuzz/long_run.py`` and its numbers are in
 ``docs/reliability.md``.  By default each property runs a small share
 (:data:`BUDGET`) of its full count, so the suite stays quick;
 ``MECHCIRC_FUZZ_BUDGET=1 python -m pytest tests/fuzz`` runs the full counts
-(18,580 inputs).  Two kinds of input here, derandomised so that a failure
+(18,680 inputs).  Two kinds of input here, derandomised so that a failure
 reproduces:
 
 * hypothesis text strategies over the grammars' alphabets (shrunk to a
@@ -40,7 +40,7 @@ def _budget() -> float:
 
 
 #: Share of each property's full count run (environment variable MECHCIRC_FUZZ_BUDGET;
-#: default 0.05, i.e. 945 of the 18,580 inputs; 1 runs them all).
+#: default 0.05, i.e. 950 of the 18,680 inputs; 1 runs them all).
 BUDGET = _budget()
 
 
@@ -88,6 +88,13 @@ def test_fuzz_netlists(seed):
 @given(seeds)
 def test_fuzz_linkage_files(seed):
     h.linkage_property(h.toml_input(random.Random(seed)))
+
+
+@fast(100)
+@given(seeds)
+def test_fuzz_public_analyses_of_valid_networks(seed):
+    """(Found: ``Circuit.unloaded`` raised NotSeriesParallelError for a mesh with a lever.)"""
+    h.api_property(h.api_network(seed))
 
 
 @pytest.fixture(scope="module")
