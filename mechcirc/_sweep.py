@@ -640,7 +640,8 @@ UNDAMPED_ZETA = 1e-12
 
 def peak(result: "Sweep | Circuit", omega_min: float | None = None,
          omega_max: float | None = None, quantity: str | None = None, *,
-         method: Method = "auto", xtol: float = 1e-12, resonances: list | None = None) -> Peak:
+         method: Method = "auto", xtol: float = 1e-12,
+         resonances: "list | MechcircError | None" = None) -> Peak:
     """The largest |Q0|, |v0|, |K| or |S| = 1/|K| over [``omega_min``, ``omega_max``], located exactly.
 
     Parameters
@@ -768,23 +769,17 @@ def _peak_roots(circuit, lo: float, hi: float, quantity: str, resonances) -> tup
     K — from ``resonances`` when given, else computed; and ``""``, or why they could not
     be computed (then no roots: the search is the grid's)."""
     kind = "resonance" if quantity in ("Q0", "S") else "antiresonance"
-    if isinstance(resonances, MechcircError):       # asked for already, and refused
-        return [], _grid_only(resonances)
-    if resonances is not None:
-        return [r for r in resonances if r.kind == kind and lo * (1 - 1e-12) <= r.omega
-                and r.omega <= hi * (1 + 1e-9)], ""
     try:
-        # Only this kind is polished (the other's polish is half the work).
-        return [r for r in circuit.resonances(omega_max=hi * (1 + 1e-9), kind=kind)
-                if lo * (1 - 1e-12) <= r.omega], ""
+        if isinstance(resonances, MechcircError):       # asked for already, and refused
+            raise resonances
+        # (asked for, only this kind is polished: the other's polish is half the work)
+        found = circuit.resonances(omega_max=hi * (1 + 1e-9), kind=kind) \
+            if resonances is None else resonances
+        return [r for r in found if r.kind == kind
+                and lo * (1 - 1e-12) <= r.omega <= hi * (1 + 1e-9)], ""
     except MechcircError as exc:    # e.g. more roots in the band than the band solver takes
-        return [], _grid_only(exc)
-
-
-def _grid_only(exc: MechcircError) -> str:
-    """:attr:`Peak.note` where the resonances could not be found (``exc`` says why)."""
-    return (f"searched around the grid's largest value only, a narrow peak between "
-            f"two grid points may be missed: the resonances were not found ({exc})")
+        return [], (f"searched around the grid's largest value only, a narrow peak between "
+                    f"two grid points may be missed: the resonances were not found ({exc})")
 
 
 def _peak_search(circuit, method, quantity, lo, hi, brackets, best_value, best_omega, xtol,

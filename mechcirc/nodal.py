@@ -33,6 +33,7 @@ from ._nodal_residual import pattern, residual_rounding, row_max, total_error
 from ._nodal_steps import bound_point, estimate_point
 from ._nodal_solvers import DD_LIMIT, DENSE_LIMIT, balance, dd_solver, solver
 from .errors import TopologyError
+from .topology import adjacency, reachable
 
 __all__ = ["NodalSystem", "Solution", "assemble", "stamps", "combine", "matrix",
            "dense_matrices", "solve", "solve_unit", "mobility", "mobility_and_error",
@@ -807,8 +808,7 @@ def require_nonsingular(system: NodalSystem, source: str | None = None) -> None:
         raise TopologyError(
             "nothing between the drive's nodes carries force (no unknowns left; unloaded: "
             f"{', '.join(system.unloaded[:12]) or 'none'})", elements=system.unloaded)
-    if system.levers:
-        _require_drive_free(system, source)
+    _require_drive_free(system, source)
     values = pattern(system).e_val
     if not system.levers and ((values > 0) & (values < np.inf)).all():
         return
@@ -856,62 +856,38 @@ def _require_drive_free(system: NodalSystem, source: str | None = None) -> None:
     that is not there (levers in parallel at ratios 2 and 3).  Judged on the levers
     linked to the drive's nodes, G balanced by powers of 2 (ratios span up to 600
     decades): c is in its row space when appending c does not raise the numerical
-    rank (singular values above 10·max(shape)·u·σ_max).
+    rank (singular values above 10·max(shape)·u·max|entry|); the error names them all.
     """
-    n, k = len(system.nodes), len(system.levers)
+    n = len(system.nodes)
     rows, cols, vals = (np.asarray(a) for a in system.stamps["lever"])
-    keep = (rows >= n) & (cols < n) & (vals != 0)
-    rows, cols, vals = rows[keep] - n, cols[keep], vals[keep]
+    rows, cols, vals = (x[(rows >= n) & (cols < n)] for x in (rows - n, cols, vals))
     ends = [i for i in (system.a, system.b) if i >= 0]
-    levers = _levers_linked(rows.tolist(), cols.tolist(), ends, k)
-    if not levers or len(levers) > LOCK_DENSE_LEVERS:
-        return
+    # The levers ("L" r) linked to the drive's nodes through the nodes ("N" c) they share
+    adj = adjacency((f"L{r}", f"N{c}") for r, c in zip(rows.tolist(), cols.tolist()))
+    levers = sorted({int(x[1:]) for e in ends for x in reachable(adj, f"N{e}") if x[0] == "L"})
+    if not levers or len(levers) > LOCK_DENSE_LEVERS or not np.isfinite(vals).all():
+        return                          # (values beyond float64: the trial solves judge)
     pick = np.isin(rows, levers)
     nodes = np.unique(np.concatenate([cols[pick], ends]))
     G = np.zeros((len(levers), nodes.size))
     np.add.at(G, (np.searchsorted(levers, rows[pick]), np.searchsorted(nodes, cols[pick])),
               vals[pick])
     c = system.injection()[nodes]
-    if not np.isfinite(G).all():
-        return                          # (values beyond float64: the trial solves judge)
     for _ in range(4):                  # rows, then columns, to a largest |entry| in [1, 2)
-        G = np.ldexp(G, -np.frexp(np.abs(G).max(axis=1, keepdims=True))[1] + 1)
-        e = -np.frexp(np.abs(G).max(axis=0, keepdims=True))[1] + 1
-        e[np.abs(G).max(axis=0, keepdims=True) == 0] = 0
-        G, c = np.ldexp(G, e), np.ldexp(c, e[0])
-    both = np.vstack([G, c / np.abs(c).max()])
-    if _numerical_rank(both) > _numerical_rank(G):
+        G = np.ldexp(G, 1 - np.frexp(np.abs(G).max(axis=1, keepdims=True))[1])
+        e = np.where(G.any(axis=0), 1 - np.frexp(np.abs(G).max(axis=0))[1], 0)
+        G, c = np.ldexp(G, e), np.ldexp(c, e)
+    rank = [np.linalg.matrix_rank(X, 10 * max(X.shape) * np.finfo(float).eps * np.abs(X).max())
+            for X in (G, np.vstack([G, c / np.abs(c).max()]))]
+    if rank[1] > rank[0]:
         return
-    y = np.abs(np.linalg.lstsq(G.T, c, rcond=None)[0])     # (the levers that hold it)
-    held = [system.levers[i] for i, yi in zip(levers, y) if yi > 1e-8 * y.max()]
+    held = [system.levers[i] for i in levers]
     raise TopologyError(
         f"the lever(s) {', '.join(lv.name for lv in held[:12])} hold the drive's two nodes "
         "together: K = 0 at every frequency, no force moves the drive (check those "
         "levers' ratios and sides)", nodes=[system.nodes[i] for i in ends],
         elements=[lv.name for lv in held],
         location=f"{source}:{held[0].line}:1" if source and held[0].line else None)
-
-
-def _levers_linked(rows: list, cols: list, ends: list, k: int) -> list[int]:
-    """The levers (sorted) reached from the nodes ``ends`` through the nodes levers share."""
-    by_node: dict[int, list[int]] = {}
-    nodes_of: list[list[int]] = [[] for _ in range(k)]
-    for r, c in zip(rows, cols):
-        by_node.setdefault(c, []).append(r)
-        nodes_of[r].append(c)
-    seen_nodes, found, todo = set(ends), set(), list(ends)
-    while todo:
-        for lv in by_node.get(todo.pop(), ()):
-            if lv not in found:
-                found.add(lv)
-                todo.extend(x for x in nodes_of[lv] if x not in seen_nodes)
-                seen_nodes.update(nodes_of[lv])
-    return sorted(found)
-
-
-def _numerical_rank(A) -> int:
-    sv = np.linalg.svd(A, compute_uv=False)
-    return int(np.count_nonzero(sv > 10 * max(A.shape) * np.finfo(float).eps * sv[0]))
 
 
 def _dense_verdict(system: NodalSystem, trial):

@@ -518,8 +518,8 @@ def _modes(M, D, Ks, G, damped: bool, omega_max=None, vectors: bool = False):
         s, err, must, U = _undamped_roots(Mr / scale_m, Kr / scale_k, w_ref, vectors)
         if not exact_basis(G):
             must = np.ones(s.size)
-        elif G.shape[0]:
-            err = err * _product_growth(Z, (M, Ks), (Mr, Kr), dense)
+        elif G.shape[0]:            # (the rounding of ZᵀXZ, which Weyl's bound does not see)
+            err = err * _product_growth(Z, (M, Ks), (Mr, Kr))
     else:
         with np.errstate(all="ignore"):
             scaled = (Mr / scale_m, Dr / (scale_m * w_ref), Kr / scale_k)
@@ -537,7 +537,7 @@ def _modes(M, D, Ks, G, damped: bool, omega_max=None, vectors: bool = False):
     return roots, (Z @ U if vectors and G.shape[0] else U)
 
 
-def _product_growth(Z, parts, products, dense: bool) -> float:
+def _product_growth(Z, parts, products) -> float:
     """How much larger than ZᵀXZ the bound of its rounding is: max over X of
     max|Zᵀ|X|Z| (elementwise, |Z| too) / max|ZᵀXZ|, at least 1.
 
@@ -547,16 +547,9 @@ def _product_growth(Z, parts, products, dense: bool) -> float:
     bound, and the root was 6 ulps off with an error of 4 (random network 131 of
     seed 3, tests/fuzz/numeric_run.py roots).  1 where Z merges or keeps columns
     whose springs and masses do not cancel (no levers, most drive rows)."""
-    growth = 1.0
-    with np.errstate(all="ignore"):
-        absZ = np.abs(Z)
-        for X, P in zip(parts, products):
-            top = np.abs(P).max(initial=0.0)
-            bound = absZ.T @ abs(X) @ absZ
-            big = (np.abs(bound).max(initial=0.0) if dense else abs(bound).max())
-            if top > 0 and np.isfinite(big):
-                growth = max(growth, float(big) / top)
-    return growth
+    with np.errstate(all="ignore"):     # (abs and max: numpy's and scipy.sparse's alike)
+        return max([1.0] + [r for X, P in zip(parts, products) if np.isfinite(
+            r := np.float64(abs(abs(Z).T @ abs(X) @ abs(Z)).max()) / np.abs(P).max())])
 
 
 def _rounding_factor(n: int) -> float:
@@ -1129,11 +1122,10 @@ def secant_steps(g_and_delta, admissible, s0, e0, offset, active=True, iteration
     the step's point as it may be taken (e.g. projected on the jω axis) and
     whether it may be.  A root stops once its step is within rounding of its
     own uncertainty; its error is then (bound of g / slope + the last step or the Newton
-    step |g/slope| where it stopped, the longer).  Where
-    the secant wandered off (to another root, or nowhere: farther than 1e-3
-    relative, or no estimate) ``s0`` stands with its estimate ``e0``, but never
-    below 10 Newton steps |g/g'| at ``s0`` (how far the circuit's own K says the
-    root is).
+    step |g/slope| where it stopped, the longer).  Where the secant wandered off (to
+    another root, or nowhere: farther than 1e-3 relative, or no estimate) ``s0`` stands
+    with its estimate ``e0``, but never below 10 Newton steps |g/g'| at ``s0`` (how far
+    the circuit's own K says the root is; infinitely far where g is not known there).
     """
     h = np.maximum(np.minimum(np.abs(s0) * np.maximum(e0, 1e-9), spacing / 4), 1e-300)
     a, b = s0 - h * offset, s0.copy()
@@ -1141,10 +1133,8 @@ def secant_steps(g_and_delta, admissible, s0, e0, offset, active=True, iteration
     gb, db = g_and_delta(b)
     with np.errstate(all="ignore"):
         g0, slope0 = gb, (gb - ga) / (b - a)
-    # A start where g has no digit known is no secant point either (random network 231
-    # of seed 4: K of 1e18 with an infinite bound at a mode in both problems, then a
-    # slope of 1e17 "converged" 1e-9 from the root with an error of 2.2e-16).
-    # (an exact zero of g is known whatever its relative estimate says: 0·inf)
+    # No secant point where g has no digit (an exact zero is known: 0·inf), network 231 of
+    # seed 4: K = 1e18 (bound inf) at s0 gave a slope that "converged" 1e-9 off, error 2.2e-16
     known = (np.isfinite(da) | (ga == 0)) & (np.isfinite(db) | (gb == 0))
     active = active & np.isfinite(ga) & np.isfinite(gb) & known
     step = np.full(b.shape, np.inf)
@@ -1170,15 +1160,6 @@ def secant_steps(g_and_delta, admissible, s0, e0, offset, active=True, iteration
         with np.errstate(all="ignore"):
             done = step <= np.maximum(4 * _EPS * np.abs(b), db / np.abs(slope))
         active = ok & ~done
-    return _secant_outcome(s0, e0, (b, gb, db, step, slope), (g0, slope0, known))
-
-
-def _secant_outcome(s0, e0, last, start) -> tuple:
-    """(s, relative error) of :func:`secant_steps` once it stopped: ``last`` = (b, g(b),
-    its bound, the last step, the slope), ``start`` = (g(s0), the first slope, whether g
-    was known at both starting points)."""
-    b, gb, db, step, slope = last
-    g0, slope0, known = start
     with np.errstate(all="ignore"):
         # The last step, or the Newton step from where it stopped if longer: a secant that
         # stopped by coming back to an earlier point (a zero step) far from the root (|g|
@@ -1187,11 +1168,8 @@ def _secant_outcome(s0, e0, last, start) -> tuple:
         moved = np.abs(b - s0) / np.abs(s0)
         newton = np.abs(g0 / slope0) / np.abs(s0)
     bad = ~np.isfinite(err) | ~np.isfinite(b) | (moved > 1e-3)
-    # g finite, nonzero and the same at both starting points (a slope of 0), or not
-    # known there: K does not confirm a root near s0, whatever the eigen-solver said.
-    flat = np.isfinite(g0) & (g0 != 0) & (slope0 == 0)
-    newton = np.where(np.isfinite(newton) & known, 10 * newton,
-                      np.where(flat | ~known, np.inf, 0.0))
+    # (g not known at a start: K does not confirm a root near s0, whatever the eigen-solver said)
+    newton = np.where(np.isfinite(newton) & known, 10 * newton, np.where(known, 0.0, np.inf))
     return np.where(bad, s0, b), np.where(bad, np.maximum(e0, newton), np.maximum(err, _EPS))
 
 

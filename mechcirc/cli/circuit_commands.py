@@ -116,13 +116,12 @@ def _register_resonances(sub) -> None:
     add_handler(p, cmd_resonances)
 
 
-def _tree_and_unloaded(circuit) -> tuple[str, tuple[str, ...]]:
-    """The reduction tree as text and the unloaded elements, from the method that applies."""
+def _tree_text(circuit) -> str:
+    """The reduction tree as text, or why there is none (nodal analysis is used)."""
     try:
-        tree = str(circuit.tree)
+        return str(circuit.tree)
     except NotSeriesParallelError as exc:
-        tree = f"(not series–parallel: {exc.message}; nodal analysis is used)"
-    return tree, circuit.unloaded
+        return f"(not series–parallel: {exc.message}; nodal analysis is used)"
 
 
 def cmd_check(args) -> int:
@@ -130,7 +129,7 @@ def cmd_check(args) -> int:
     elements = [fields_of(e, "name kind n1 n2 value eta line") for e in circuit.elements]
     levers = [fields_of(lv, "name p1 p2 s1 s2 ratio line") for lv in circuit.levers]
     d = circuit.drive
-    tree, unloaded = _tree_and_unloaded(circuit)
+    tree, unloaded = _tree_text(circuit), circuit.unloaded
     doc = {
         "file": args.file, "name": circuit.name,
         "drive": {**fields_of(d, "name n1 n2 kind amplitude"),
@@ -252,23 +251,22 @@ def cmd_sweep(args) -> int:
     omega = _omega_grid(args)
     result = _run_sweep(args, circuit, omega)
     extra = _responses(result, args.node, args.element)
-    everything = None
+    everything = refused = None
     if args.plot or args.json:
         try:
             # The band's top as peak() asks for it (1e-9 above): computed once for both.
             everything = circuit.resonances(omega_max=omega[-1] * (1 + 1e-9))
         except SolverError as exc:      # too large for the eigenproblem: sweep anyway
             warns.append(f"resonance markers left out: {exc}")
-            everything = exc            # (peak() is told, not made to ask again)
-    found = [r for r in everything or () if omega[0] <= r.omega <= omega[-1]] \
-        if isinstance(everything, list) else []
+            refused = exc               # (peak() is told, not made to ask again)
+    found = [r for r in everything or () if omega[0] <= r.omega <= omega[-1]]
     # (sweep_sensitivity imported above, where the names were checked)
     sens = sweep_sensitivity(circuit, result.omega, args.sensitivity) if args.sensitivity else None
     from .._sweep import FLAG_SINGULAR, peak
 
-    with warnings.catch_warnings():     # (its note is in the peak line and the JSON)
-        warnings.simplefilter("ignore", PeakAccuracyWarning)
-        pk = peak(result, resonances=everything)
+    # (a grid-only peak's note is in its line and the JSON: not again as a warning)
+    with warnings.catch_warnings(action="ignore", category=PeakAccuracyWarning):
+        pk = peak(result, resonances=everything if refused is None else refused)
     singular = [float(w) for w in result.omega[result.flags == FLAG_SINGULAR]]
     notes = list(getattr(result, "notes", ()))
     if singular:
