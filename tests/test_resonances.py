@@ -399,6 +399,27 @@ def test_a_root_k_does_not_confirm_keeps_no_small_error():
     assert [r.error for r in found if r.omega > 1e9 and r.kind == "resonance"] == [np.inf]
 
 
+def test_a_secant_started_where_g_has_no_digit_keeps_no_small_error():
+    """g = s − (1 − 2e-9), but at the start s0 = 1 it comes with no digit (1e18, bound
+    ∞; K beside a mode of both problems, network 231 of seed 4).  From that point the
+    secant's slope sent it back to the other start, 1e-9 from the root, and it stopped
+    there with an error of 2e-16.  A start without a digit is no secant point: K does
+    not confirm a root near s0, and its error stays infinite."""
+    from mechcirc.resonances import secant_steps
+
+    root = 1 - 2e-9
+
+    def g_and_delta(s):
+        s = np.asarray(s, dtype=complex)
+        unknown = s == 1.0
+        return (np.where(unknown, 1e18, s - root),
+                np.where(unknown, np.inf, 1e-16 * np.abs(s)))
+
+    s, err = secant_steps(g_and_delta, lambda c: (c, np.isfinite(c)), np.array([1.0 + 0j]),
+                          np.array([1e-12]), 1)
+    assert err[0] == np.inf
+
+
 def test_weakly_coupled_pair_of_the_damped_ladder_is_reported():
     """The 45-element ladder's mode at 516.08 rad/s is seen from the drive only weakly:
     K has its zero and pole 3.0e-11 apart (relative), 4 000 times their estimates (about
