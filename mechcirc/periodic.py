@@ -21,7 +21,9 @@ Number of harmonics.  N is the smallest for which the omitted tail,
 Σ_{k>N} |Q_k| (a bound of the truncation error at every θ), is at most
 ``tol`` × max|Q(θ)|: the terms are computed out to k_max (raised ×4 from 64
 until the tail beyond k_max, extrapolated from the last two octaves of |Q_k|,
-is small), the rest extrapolated.  The reported ``error`` is that tail plus
+is small, and, where a resonance or anti-resonance of K within 4096 harmonics lies in or
+above the last two octaves, until they lie above it or its gain could not make their
+sum matter), the rest extrapolated.  The reported ``error`` is that tail plus
 the rounding of K (:attr:`Sweep.error`) over the harmonics used and, for a
 table, the interpolation estimate (the same force from the spline through
 every other row), all relative to max|Q|.
@@ -346,16 +348,17 @@ def _solve(circuit, motion, amp, Omega, tol, harmonics, method,
     """
     Omega = np.atleast_1d(np.asarray(Omega, dtype=float))
     S = Omega.size
-    N = np.zeros(S, dtype=int)
-    error = np.zeros(S)
-    table_error = np.zeros(S)
+    N, error, table_error = np.zeros(S, dtype=int), np.zeros(S), np.zeros(S)
     rows: list = [None] * S                    # (V, Qk, sweep, index in the sweep)
     pending = np.arange(S)
     kmax = max(64, 4 * harmonics) if harmonics else 64
+    # (ωₙ, ζ) of every root of K the harmonics can reach (none needed for a fixed N)
+    roots = np.array([r[:2] for r in _resonances(circuit, max_harmonics * Omega.max(), [],
+                                                 None)] if not harmonics else []).reshape(-1, 2)
     while pending.size:
         n, e, from_table, V, Qk, sw, done = _harmonics_round(
             circuit, motion, Omega[pending], kmax, tol, harmonics, method,
-            done_anyway=bool(harmonics) or kmax >= max_harmonics)
+            done_anyway=bool(harmonics) or kmax >= max_harmonics, roots=(roots, max_harmonics))
         for j in np.flatnonzero(done):
             i = pending[j]
             N[i], error[i], table_error[i] = n[j], e[j], from_table[j]
@@ -363,15 +366,13 @@ def _solve(circuit, motion, amp, Omega, tol, harmonics, method,
         pending = pending[~done]
         kmax = min(4 * kmax, max_harmonics)
     width = int(N.max())
-    Vs = np.zeros((S, width), dtype=complex)
-    Qs = np.zeros((S, width), dtype=complex)
+    Vs, Qs = np.zeros((S, width), dtype=complex), np.zeros((S, width), dtype=complex)
     Ks = np.full((S, width), complex(math.inf, 0.0))
     for i, (v, q, sw, at) in enumerate(rows):
         Vs[i, :v.size], Qs[i, :q.size], Ks[i, :v.size] = v, q, sw.K[at:at + v.size]
 
     def responses(name):
-        F = np.zeros((S, width), dtype=complex)
-        U = np.zeros((S, width), dtype=complex)
+        F, U = np.zeros((S, width), dtype=complex), np.zeros((S, width), dtype=complex)
         for i, (v, _, sw, at) in enumerate(rows):
             F[i, :v.size] = sw.force(name)[at:at + v.size] * (v / amp)
             U[i, :v.size] = sw.velocity(name)[at:at + v.size] * (v / amp)
@@ -380,11 +381,18 @@ def _solve(circuit, motion, amp, Omega, tol, harmonics, method,
     return N, Vs, Qs, Ks, error, _not_met(N, error, table_error, tol), responses
 
 
-def _harmonics_round(circuit, motion, Omega, kmax, tol, harmonics, method, done_anyway):
+def _harmonics_round(circuit, motion, Omega, kmax, tol, harmonics, method, done_anyway,
+                     roots):
     """One round of :func:`_solve` at the speeds ``Omega`` with ``kmax`` harmonics:
     per speed the harmonics needed ``n``, the relative error ``e`` (of it, the
     table's interpolation ``from_table``), the amplitudes V and Qk (shape
-    (speeds, kmax)), the sweep, and which speeds are ``done``."""
+    (speeds, kmax)), the sweep, and which speeds are ``done``.
+
+    The tail beyond k_max is extrapolated from the last two octaves, which a root of K
+    (``roots``: its (ωₙ, ζ) rows, and the most harmonics) in or above them bends: an
+    anti-resonance in them hid a resonance's tail 18 times the estimate.  Such a root
+    leaves a speed not done unless those octaves' sum, raised by its gain (the rise of
+    |1/K| up to it, at most ∝ ω, times 1/(2ζ) at a resonance), is still small."""
     P = Omega.size
     c = motion.fourier(kmax)
     k = np.arange(1, kmax + 1)
@@ -400,7 +408,12 @@ def _harmonics_round(circuit, motion, Omega, kmax, tol, harmonics, method, done_
     # their Σ|Q_k|, a small fraction wherever a tolerance can be met at all.
     head = Qk[:, :512]
     scale = _peaks(np.where(np.isfinite(head), head, 0.0), fine=False)[0]
-    done = (beyond <= 0.25 * tol * scale) | done_anyway
+    (roots, most), lo = roots, kmax * Omega[:, None] / 8
+    above = (roots[:, 0] > lo) & (roots[:, 0] <= most * Omega[:, None])
+    with np.errstate(divide="ignore"):
+        gain = np.where(above, roots[:, 0] / lo / (2 * roots[:, 1]), 0.0).max(axis=1, initial=0)
+    window = gain * mag[:, kmax // 4:].sum(axis=1)
+    done = (np.fmax(beyond, window) <= 0.25 * tol * scale) | done_anyway
     tail = np.cumsum(mag[:, ::-1], axis=1)[:, ::-1]         # Σ_{k' ≥ k}
     tail = np.concatenate([tail[:, 1:], np.zeros((P, 1))], axis=1) + beyond[:, None]
     if harmonics:
@@ -444,19 +457,20 @@ def _not_met(N, error, table_error, tol) -> list[str]:
             f"estimated {error[i]:.3g} ({why})"]
 
 
-def _resonances(circuit, omega_max, notes):
-    """(ωₙ, ζ, error) of the resonances (K = 0) up to ``omega_max``; a note if they cannot be had.
+def _resonances(circuit, omega_max, notes, kind="resonance"):
+    """(ωₙ, ζ, error) of the resonances (K = 0; ``kind=None``: and anti-resonances) up to
+    ``omega_max``; a note if they cannot be had.
 
     Kept on the circuit (they do not depend on the speed), as its reduction is."""
     def make():
-        return omega_max, [(r.omega, r.zeta, r.error) for r in
-                           circuit.resonances(omega_max=omega_max) if r.kind == "resonance"]
+        return omega_max, [(r.omega, r.zeta, r.error, r.kind) for r in
+                           circuit.resonances(omega_max=omega_max)]
     try:
         cached = circuit.memo("_periodic_resonances", make, lambda c: c[0] >= omega_max)
     except MechcircError as exc:
         notes.append(f"resonances not computed ({exc}); harmonics are not named")
         return []
-    return [r for r in cached[1] if r[0] <= omega_max]
+    return [r[:3] for r in cached[1] if r[0] <= omega_max and kind in (None, r[3])]
 
 
 def _validate(rpm, tol, harmonics):
@@ -578,8 +592,7 @@ def _nearest(found, w, V, Qk):
     """For each harmonic ω = ``w``: the nearest resonance of ``found`` and the relative
     distance to it, and the harmonics (numbered from 1) whose force is unbounded
     (an infinite term, or on an undamped resonance within its error)."""
-    nearest = np.full(w.size, np.nan)
-    distance = np.full(w.size, np.nan)
+    nearest, distance = np.full(w.size, np.nan), np.full(w.size, np.nan)
     unbounded = set(np.flatnonzero(~np.isfinite(Qk) & (np.abs(V) > 0)) + 1)
     vmax = float(np.max(np.abs(V))) if w.size else 0.0
     for wn, zeta, err in found:
@@ -622,16 +635,13 @@ def speed_map(circuit: Circuit, rpm_min: float, rpm_max: float, points: int = 20
     circuit, motion, amp = _prepared(circuit, motion)
     elements = (elements,) if isinstance(elements, str) else elements      # one name
     rpm = np.linspace(rpm_min, rpm_max, points)
-    used = np.zeros(points, dtype=int)
-    error = np.zeros(points)
-    peak = np.zeros(points)
+    used, error, peak = np.zeros(points, dtype=int), np.zeros(points), np.zeros(points)
     element_peaks = {name: np.zeros(points) for name in elements}
     notes: list[str] = []
     for lo in range(0, points, SPEED_CHUNK):        # bounded memory: chunk × k_max phasors
         part = slice(lo, min(lo + SPEED_CHUNK, points))
-        n, _, Qk, _, err, _, responses = _solve(circuit, motion, amp,
-                                                rpm_to_omega(rpm[part]), tol, harmonics,
-                                                method)
+        n, _, Qk, _, err, _, responses = _solve(
+            circuit, motion, amp, rpm_to_omega(rpm[part]), tol, harmonics, method)
         unbounded = ~np.all(np.isfinite(Qk), axis=1)
         used[part], error[part] = n, np.where(unbounded, math.inf, err)
         peak[part] = _peak_or_inf(Qk, unbounded)
