@@ -8,6 +8,10 @@ values over several decades), drawn from ``--seed``::
     python tests/fuzz/numeric_run.py roots --seed 3 --count 300
     python tests/fuzz/numeric_run.py peak --seed 2 --count 300
     python tests/fuzz/numeric_run.py sensitivity --seed 1 --count 150
+    python tests/fuzz/numeric_run.py periodic --seed 1 --count 150
+    python tests/fuzz/numeric_run.py modes --seed 2 --count 200
+    python tests/fuzz/numeric_run.py sweep_sensitivity --seed 2 --count 150
+    python tests/fuzz/numeric_run.py errors --seed 2 --count 300
 
 * ``roots``: every root of ``find_resonances`` within its stated error of the
   zero of det A (an anti-resonance, a pole of K) or of det [[A, c], [cᵀ, 0]]
@@ -23,7 +27,21 @@ values over several decades), drawn from ``--seed``::
 * ``sensitivity``: each mode's ``sensitivity`` (p/ωₙ)·∂ωₙ/∂p and
   ``zeta_sensitivity`` p·∂ζ/∂p of the first four elements, against central
   differences (p·(1 ± 1e-6)) of the determinants' roots in mpmath; an
-  element left out of the dicts must move no root.
+  element left out of the dicts must move no root;
+* ``periodic``: ``mechcirc.periodic`` of a damped network driven by a cam
+  cycle (cycloidal, 3-4-5 or harmonic law, random angles, stroke and speed),
+  within its estimated error of the sum of 32,768 harmonics: the textbook
+  law's dx/dθ by FFT (2²⁰ samples), K by ``numpy.linalg.solve`` of the
+  element matrices (that reference's own tail is added to the allowance);
+* ``modes``: each mode shape (nodes on a loaded path) against the null vector
+  of A(s) or [[A, c], [cᵀ, 0]] at the determinant's zero (mpmath's SVD, 40
+  digits), within 1e-7 of its largest entry, and the energy shares from that
+  vector within 1e-8 (close pairs and overdamped roots left out);
+* ``sweep_sensitivity``: p·∂K/∂p of ``sweep_sensitivity`` at three ω against
+  central differences p·(1 ± 1e-12) of K in mpmath (60 digits), within 1e-8
+  of max(|K|, |p·∂K/∂p|);
+* ``errors``: K of ``sweep`` (``method="auto"`` and ``"nodal"``) at eight ω
+  within its ``error`` of K in mpmath (40 digits).
 
 Each prints the cases outside their tolerance and a summary line.
 """
@@ -35,6 +53,7 @@ import sys
 import warnings
 from pathlib import Path
 
+import mpmath
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
@@ -123,7 +142,7 @@ def peak(seed: int, count: int) -> int:
         local = np.flatnonzero((q[1:-1] >= q[:-2]) & (q[1:-1] >= q[2:])) + 1
         best, at_best = q.max(), w[np.argmax(q)]
         for k in local[np.argsort(q[local])[-5:]]:
-            x, v = _golden_max(lambda x: _q0(mats, c, x)[0], w[k - 1], w[k + 1])
+            x, v = _golden_max(lambda x, mats=mats, c=c: _q0(mats, c, x)[0], w[k - 1], w[k + 1])
             if v > best:
                 best, at_best = v, x
         at = _q0(mats, c, p.omega)[0]
@@ -191,9 +210,183 @@ def sensitivity(seed: int, count: int, h: float = 1e-6) -> int:
     return bad
 
 
+def _law_rate(name: str, u):
+    """d/du of the normalised rise of a cam law, the textbook formulas (not mechcirc's)."""
+    if name == "cycloidal":
+        return 1 - np.cos(2 * np.pi * u)
+    if name == "polynomial_345":
+        return 30 * u**2 - 60 * u**3 + 30 * u**4
+    return np.pi / 2 * np.sin(np.pi * u)                  # harmonic
+
+
+def periodic(seed: int, count: int) -> int:
+    from mechcirc.periodic import periodic as run
+
+    rng = np.random.default_rng(seed + 1000)
+    bad = checked = skipped = 0
+    n, kref = 1 << 20, 1 << 15
+    th = 2 * np.pi * np.arange(n) / n
+    for i, text, spec, wc in networks(seed, count, damped=True):
+        law = str(rng.choice(["cycloidal", "polynomial_345", "harmonic"]))
+        rise, dwell, ret = (np.radians(x) for x in rng.uniform([40, 0, 40], [150, 60, 150]))
+        h, Omega = float(10 ** rng.uniform(-3, 0)), wc * 10 ** rng.uniform(-2, 0)
+        line = (f"drive V n1 0 motion={law} rise={float(np.degrees(rise))!r} dwell="
+                f"{float(np.degrees(dwell))!r} return={float(np.degrees(ret))!r} stroke={h!r}")
+        try:
+            r = run(mechcirc.parse(text.replace("drive V n1 0 velocity=1", line)),
+                    Omega * 30 / np.pi)
+        except mechcirc.MechcircError:      # e.g. levers that hold the drive
+            r = None
+        if r is None or not np.isfinite(r.error):
+            skipped += 1
+            continue
+        up, back = th < rise, (th >= rise + dwell) & (th < rise + dwell + ret)
+        dx = np.zeros(n)
+        dx[up] = h / rise * _law_rate(law, th[up] / rise)
+        dx[back] = -h / ret * _law_rate(law, (th[back] - rise - dwell) / ret)
+        k = np.arange(1, kref + 1)
+        mats, c = _matrices(spec)
+        w = k * Omega
+        A = (mats["damper"] + mats["lever"])[None] + 1j * (
+            w[:, None, None] * mats["mass"][None] - mats["spring"][None] / w[:, None, None])
+        x = np.linalg.solve(A, np.broadcast_to(c.astype(complex), (w.size, c.size))[..., None])
+        Qk = 2 * Omega * (np.fft.rfft(dx) / n)[1:kref + 1] / (x[..., 0] @ c)
+        Q = np.real(np.exp(1j * np.outer(np.radians(r.angle_deg), k)) @ Qk)
+        peak, tail = np.abs(Q).max(), np.abs(Qk[kref // 2:]).sum()
+        off = np.abs(Q - r.Q).max() / peak
+        checked += 1
+        if off > r.error + tail / peak + 1e-12:
+            bad += 1
+            print(f"net {i}: {law} at {Omega * 30 / np.pi:.6g} rpm, {r.harmonics} harmonics: "
+                  f"off by {off:.2e} of the peak, estimated {r.error:.2e}")
+    print(f"periodic, seed {seed}: {checked} checked ({skipped} with no finite estimate or "
+          f"refused), {bad} beyond their estimate")
+    return bad
+
+
+def _null_vector(spec, s, held: bool, dps: int = 40) -> dict:
+    """Node velocities of the null vector of A(s) (``held``: of [[A, c], [cᵀ, 0]]) in mpmath."""
+    mats, c = mp_nodal._matrices(spec, dps)
+    names = sorted(({x for _, a, b, _ in spec["elements"] for x in (a, b)} |
+                    {x for lv in spec["levers"] for x in lv[1:5]}) - {"0"})
+    size = c.rows + held
+    with mpmath.workdps(dps):
+        A = mats["damper"] + mats["lever"] + s * mats["mass"] + mats["spring"] / s
+        B = mpmath.zeros(size, size)
+        for i in range(c.rows):
+            for j in range(c.rows):
+                B[i, j] = A[i, j]
+            if held:
+                B[i, c.rows] = B[c.rows, i] = c[i]
+        _, S, V = mpmath.svd_c(B)
+        k = min(range(size), key=lambda i: abs(S[i]))
+        return {x: complex(mpmath.conj(V[k, i])) for i, x in enumerate(names)}
+
+
+def modes(seed: int, count: int) -> int:
+    bad = checked = 0
+    for i, text, spec, _ in networks(seed, count):
+        try:
+            found = mechcirc.parse(text).modes()
+        except mechcirc.MechcircError:      # e.g. levers that hold the drive
+            continue
+        omegas = [m.resonance.omega for m in found]
+        for m in found:
+            r = m.resonance
+            if not m.shape or sum(abs(w / r.omega - 1) < 1e-3 for w in omegas) > 1:
+                continue            # overdamped (no shape), or a close pair
+            held = r.kind == "resonance"
+            try:
+                ref = _null_vector(spec, mp_nodal.det_root(spec, _s(r), not held), held)
+            except (ValueError, ZeroDivisionError):     # no reference: not counted
+                continue
+            keys = sorted(m.shape)          # (nodes on no loaded path are left out)
+            a, b = (np.array([d[x] for x in keys]) for d in (ref, m.shape))
+            j = int(np.argmax(np.abs(b)))
+            off = float(np.max(np.abs(a / a[j] - b / b[j])))
+            v = dict(ref, **{"0": 0})
+            energy = {f"e{t}": 0.5 * y * abs(v[p] - v[q]) ** 2 / (r.omega ** 2 if kind == "spring"
+                                                                  else 1.0)
+                      for t, (kind, p, q, y) in enumerate(spec["elements"]) if kind != "damper"}
+            total = sum(energy.values())
+            share = max(abs(m.energy.get(x, 0.0) - e / total) for x, e in energy.items())
+            checked += 1
+            if off > 1e-7 or share > 1e-8:
+                bad += 1
+                print(f"net {i}: {r.kind} {r.omega:.8g}: shape off by {off:.2e} of its "
+                      f"largest, energy shares by {share:.2e}")
+    print(f"modes, seed {seed}: {count} networks, {checked} modes checked, {bad} off")
+    return bad
+
+
+def sweep_sensitivity(seed: int, count: int) -> int:
+    from mechcirc.modes import sweep_sensitivity as sweep_sensitivity_of
+
+    rng = np.random.default_rng(seed + 77)
+    h = mpmath.mpf(10) ** -12
+    bad = checked = 0
+    for i, text, spec, wc in networks(seed, count):
+        omega = wc * 10 ** rng.uniform(-1.5, 1.5, 3)
+        names = _names(spec)[:4] + [lv[0] for lv in spec["levers"]]
+        try:
+            got = sweep_sensitivity_of(mechcirc.parse(text), omega, names)
+        except mechcirc.MechcircError:      # e.g. levers that hold the drive
+            continue
+        for name in names:
+            def K(f, w, name=name, spec=spec):
+                el = [(kd, a, b, mpmath.mpf(y) * (f if f"e{t}" == name else 1))
+                      for t, (kd, a, b, y) in enumerate(spec["elements"])]
+                lv = [x[:5] + (mpmath.mpf(x[5]) * (f if x[0] == name else 1),)
+                      for x in spec["levers"]]
+                return mp_nodal.K({**spec, "elements": el, "levers": lv}, 1j * w, 60)
+            for k, w in enumerate(omega):
+                with mpmath.workdps(60):
+                    d = complex((K(1 + h, w) - K(1 - h, w)) / (2 * h))
+                    K0 = complex(K(mpmath.mpf(1), w))
+                off = abs(got.dK[name][k] - d) / max(abs(K0), abs(d), 1e-300)
+                checked += 1
+                if not off <= 1e-8:
+                    bad += 1
+                    print(f"net {i}: {name} at {w:.6g} rad/s: p dK/dp {got.dK[name][k]:.10g} "
+                          f"against {d:.10g} (K {K0:.4g}), off by {off:.2e}")
+    print(f"sweep_sensitivity, seed {seed}: {count} networks, {checked} derivatives checked, "
+          f"{bad} off by more than 1e-8 of max(|K|, |p dK/dp|)")
+    return bad
+
+
+def errors(seed: int, count: int) -> int:
+    rng = np.random.default_rng(seed + 5)
+    bad = checked = 0
+    worst = 0.0
+    for i, text, spec, wc in networks(seed, count):
+        c = mechcirc.parse(text)
+        w = np.sort(wc * 10 ** rng.uniform(-2, 2, 8))
+        for method in ("auto", "nodal"):
+            try:
+                s = c.sweep(w, method=method)
+                err = s.error
+            except mechcirc.MechcircError:      # e.g. levers that hold the drive
+                continue
+            for k in np.flatnonzero(np.isfinite(err) & np.isfinite(s.K)):
+                ref = complex(mp_nodal.K(spec, 1j * w[k], 40))
+                if ref == 0 or not np.isfinite(abs(ref)):
+                    continue
+                true = abs(s.K[k] - ref) / abs(ref)
+                checked += 1
+                worst = max(worst, true / max(err[k], 1e-300))
+                if true > err[k]:
+                    bad += 1
+                    print(f"net {i} ({method}) at {w[k]:.6g} rad/s: K off by {true:.2e}, "
+                          f"its error {err[k]:.2e}")
+    print(f"errors, seed {seed}: {count} networks, {checked} values of K checked, {bad} off by "
+          f"more than their error (the largest ratio {worst:.2f})")
+    return bad
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("campaign", choices=("roots", "peak", "sensitivity"))
+    ap.add_argument("campaign", choices=("roots", "peak", "sensitivity", "periodic", "modes",
+                                         "sweep_sensitivity", "errors"))
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--count", type=int, default=100)
     args = ap.parse_args(argv)
