@@ -19,11 +19,13 @@ the springs' free lengths, which a circuit does not hold.
 
 Number of harmonics.  N is the smallest for which the omitted tail,
 Σ_{k>N} |Q_k| (a bound of the truncation error at every θ), is at most
-``tol`` × max|Q(θ)|: the terms are computed out to k_max (raised ×4 from 64
+``tol`` × max|Q(θ)|.  The terms are computed out to k_max, raised ×4 from 64
 until the tail beyond k_max, extrapolated from the last two octaves of |Q_k|,
-is small, and, where a resonance or anti-resonance of K within 4096 harmonics lies in or
-above the last two octaves, until they lie above it or its gain could not make their
-sum matter), the rest extrapolated.  The reported ``error`` is that tail plus
+is small, and until those octaves lie above every resonance and anti-resonance
+of K within 4096 harmonics (unless the root's gain could not make their sum
+matter).  Where |Q_k| falls as 1/k the force jumps: the tail beyond k_max is
+then what it adds next to a jump, half of it, which no N reduces.  The
+reported ``error`` is that tail plus
 the rounding of K (:attr:`Sweep.error`) over the harmonics used and, for a
 table, the interpolation estimate (the same force from the spline through
 every other row), all relative to max|Q|.
@@ -313,7 +315,8 @@ def _peaks(Qk: np.ndarray, fine: bool = True) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _tail_beyond(mag: np.ndarray) -> float:
-    """Σ_{k>k_max} |Q_k| extrapolated from the last two octaves of ``mag`` (|Q_1| … |Q_kmax|)."""
+    """Σ_{k>k_max} |Q_k| extrapolated from the last two octaves of ``mag`` (|Q_1| … |Q_kmax|);
+    where |Q_k| falls as 1/k, what those harmonics can add at any θ instead (below)."""
     n = mag.size
     if n < 8:
         return math.inf
@@ -322,9 +325,14 @@ def _tail_beyond(mag: np.ndarray) -> float:
     if s2 == 0:
         return 0.0
     r = s2 / s1 if s1 > 0 else math.inf
-    # octave sums fall geometrically for |Q_k| ~ k^(−p): r = 2^(1−p); p ≤ 1.15 is not
-    # extrapolated (a force with jumps: its series converges too slowly, or not at all).
-    return s2 * r / (1 - r) if r < 0.9 else math.inf
+    # Octave sums fall geometrically for |Q_k| ~ k^(−p): r = 2^(1−p).  p within 0.15 of 1
+    # is a force with jumps J, |Q_k| ≈ |Σ J e^{−jkθ_J}|/(πk): their harmonics beyond any
+    # k_max add up to J/2 next to each jump (no N does better), at most π/2 · max k|Q_k|.
+    # Slower (p < 0.85: impulses) has no bound.
+    if r < 0.9:
+        return s2 * r / (1 - r)
+    return math.pi / 2 * float(np.max(mag[n // 2:] * np.arange(n // 2 + 1, n + 1))) \
+        if r <= 1.1 else math.inf
 
 
 def _unit_force(K: np.ndarray) -> np.ndarray:
@@ -446,12 +454,14 @@ def _not_met(N, error, table_error, tol) -> list[str]:
         why = (f"{table_error[i]:.2g} of it is the table's interpolation, estimated from "
                "the spline through every other row: give a finer table")
     elif math.isinf(error[i]):
-        why = ("|Q_k| falls about as slowly as 1/k, too slowly to bound the tail: the force "
-               "itself jumps, as where a mass at the drive follows a law whose "
-               "acceleration jumps; the sum shows Gibbs overshoot at the jumps")
+        why = ("|Q_k| falls more slowly than 1/k, too slowly to bound the tail: the force "
+               "has impulses, as where a mass at the drive follows a motion whose velocity "
+               "jumps")
     else:
         why = ("the force's harmonics fall off slowly: a mass or a stiff path at the "
-               "drive sees the jumps of the motion's acceleration or jerk; ask a larger "
+               "drive sees the jumps of the motion's acceleration or jerk (where the force "
+               "itself jumps, as |Q_k| ~ 1/k says, no number of harmonics does better than "
+               "half the jump: the sum shows Gibbs overshoot there); ask a larger "
                "tolerance or smooth the motion")
     return [f"the error asked for ({tol:g}) is not met with {int(N[i])} harmonics: "
             f"estimated {error[i]:.3g} ({why})"]

@@ -708,8 +708,7 @@ def _traverse(t, zones):
     za, zb = np.array(zones).T
     hit = (za[:, None] <= np.maximum(prev, t)) & (zb[:, None] >= np.minimum(prev, t))
     pts: list = []
-    where = np.full(len(t), -1)
-    zone_of = np.full(len(t), -1)
+    where, zone_of = np.full(len(t), -1), np.full(len(t), -1)
     last = 0
     for i in np.flatnonzero(hit.any(axis=0)).tolist() + [len(t)]:
         where[last:i] = len(pts) + np.arange(i - last)        # the steps that meet none
@@ -868,16 +867,14 @@ class _DyadSolver:
 
     def velocities(self, E, r, inner, w_cranks):
         """(ω, origin velocity (complex), σ̇ per dyad), for crank speeds ``w_cranks``."""
-        w = np.zeros(E.shape)
-        v = np.zeros(E.shape, dtype=complex)
+        w, v = np.zeros(E.shape), np.zeros(E.shape, dtype=complex)
         for c, ci, wc in zip(self.lk.cranks, self.pl.crank_idx, w_cranks):
             w[ci] = wc
             v[ci] = 1j * wc * (r[ci] - self.pose[c.pivot])
         return self._rates(r, inner, w, v, np.zeros(E.shape))
 
     def accelerations(self, E, r, inner, w, sdot):
-        al = np.zeros(E.shape)
-        a = np.zeros(E.shape, dtype=complex)
+        al, a = np.zeros(E.shape), np.zeros(E.shape, dtype=complex)
         for c, ci in zip(self.lk.cranks, self.pl.crank_idx):
             a[ci] = -w[ci] ** 2 * (r[ci] - self.pose[c.pivot])
         return self._rates(r, inner, al, a, w ** 2, w, sdot)[:2]

@@ -277,13 +277,11 @@ def _condense(Kq, Fu, Fx, Y, Bs, where):
 def _dynamics(My, Dy, Ky, Fyu, Fyx, n1: int, n0: int, vel: bool):
     """A, B over z = [y1, v1, y0, (X)] and M₁₁⁻¹ (y1 massive, y0 damped only)."""
     N = 2 * n1 + n0 + (1 if vel else 0)
-    A = np.zeros((N, N))
-    Bv = np.zeros(N)
+    A, Bv = np.zeros((N, N)), np.zeros(N)
     i_y1, i_v1, i_y0 = slice(0, n1), slice(n1, 2 * n1), slice(2 * n1, 2 * n1 + n0)
     iX = N - 1
     # ẏ0 = D00⁻¹ (F0 − D01 v1 − K0 y)  as  rows over z and u
-    dy0_z = np.zeros((n0, N))
-    dy0_u = np.zeros(n0)
+    dy0_z, dy0_u = np.zeros((n0, N)), np.zeros(n0)
     if n0:
         D00_inv = la.inv(Dy[n1:, n1:])
         dy0_z[:, i_v1] = -D00_inv @ Dy[n1:, :n1]
@@ -336,8 +334,7 @@ def _initial(circuit, nodes, index, Cx, Cv, N, vel):
     if not circuit.initial:
         return z0, notes
     n = len(nodes)
-    x0 = np.zeros(n)
-    v0 = np.zeros(n)
+    x0, v0 = np.zeros(n), np.zeros(n)
     for node, x, v in circuit.initial:
         if node in index:
             x0[index[node]] = x
