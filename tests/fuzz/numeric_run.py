@@ -12,6 +12,7 @@ values over several decades), drawn from ``--seed``::
     python tests/fuzz/numeric_run.py modes --seed 2 --count 200
     python tests/fuzz/numeric_run.py sweep_sensitivity --seed 2 --count 150
     python tests/fuzz/numeric_run.py errors --seed 2 --count 300
+    python tests/fuzz/numeric_run.py periodic_table --seed 1 --count 150
 
 * ``roots``: every root of ``find_resonances`` within its stated error of the
   zero of det A (an anti-resonance, a pole of K) or of det [[A, c], [cᵀ, 0]]
@@ -41,7 +42,11 @@ values over several decades), drawn from ``--seed``::
   central differences p·(1 ± 1e-12) of K in mpmath (60 digits), within 1e-8
   of max(|K|, |p·∂K/∂p|);
 * ``errors``: K of ``sweep`` (``method="auto"`` and ``"nodal"``) at eight ω
-  within its ``error`` of K in mpmath (40 digits).
+  within its ``error`` of K in mpmath (40 digits);
+* ``periodic_table``: as ``periodic``, the cycloidal or 3-4-5 cycle given as a
+  table of 181, 361 or 721 rows (the cubic spline, or the quintic Hermite with
+  the law's slope and curvature), within the estimate that includes the
+  table's interpolation.
 
 Each prints the cases outside their tolerance and a summary line.
 """
@@ -383,10 +388,72 @@ def errors(seed: int, count: int) -> int:
     return bad
 
 
+def _law_cycle(law: str, rise, dwell, ret, h, t):
+    """x, dx/dθ, d²x/dθ² of a rise–dwell–return cycle at θ = ``t`` (textbook formulas)."""
+    lift = {"cycloidal": lambda u: u - np.sin(2 * np.pi * u) / (2 * np.pi),
+            "polynomial_345": lambda u: 10 * u**3 - 15 * u**4 + 6 * u**5}[law]
+    bend = {"cycloidal": lambda u: 2 * np.pi * np.sin(2 * np.pi * u),
+            "polynomial_345": lambda u: 60 * u - 180 * u**2 + 120 * u**3}[law]
+    x, dx, ddx = np.zeros_like(t), np.zeros_like(t), np.zeros_like(t)
+    up, back = t < rise, (t >= rise + dwell) & (t < rise + dwell + ret)
+    x[(t >= rise) & (t < rise + dwell)] = h
+    for part, beta, sign, t0 in ((up, rise, 1.0, 0.0), (back, ret, -1.0, rise + dwell)):
+        u = (t[part] - t0) / beta
+        x[part] = h * (lift(u) if sign > 0 else 1 - lift(u))
+        dx[part] = sign * h / beta * _law_rate(law, u)
+        ddx[part] = sign * h / beta ** 2 * bend(u)
+    return x, dx, ddx
+
+
+def periodic_table(seed: int, count: int) -> int:
+    from mechcirc.motion_laws import motion_table
+    from mechcirc.periodic import periodic as run
+
+    rng = np.random.default_rng(seed + 2000)
+    bad = checked = skipped = 0
+    n, kref = 1 << 20, 1 << 15
+    th = 2 * np.pi * np.arange(n) / n
+    for i, text, spec, wc in networks(seed, count, damped=True):
+        law = str(rng.choice(["cycloidal", "polynomial_345"]))
+        rise, dwell, ret = (np.radians(x) for x in rng.uniform([40, 0, 40], [150, 60, 150]))
+        h, Omega = float(10 ** rng.uniform(-3, 0)), wc * 10 ** rng.uniform(-2, -0.5)
+        rows, hermite = int(rng.choice([181, 361, 721])), bool(rng.random() < 0.5)
+        ang = np.linspace(0, 360, rows)
+        x, dx, ddx = _law_cycle(law, rise, dwell, ret, h, np.radians(ang) % (2 * np.pi))
+        motion = motion_table(ang, x, slope=dx if hermite else None,
+                              curvature=ddx if hermite else None)
+        try:
+            r = run(mechcirc.parse(text), Omega * 30 / np.pi, motion=motion)
+        except mechcirc.MechcircError:      # e.g. levers that hold the drive
+            r = None
+        if r is None or not np.isfinite(r.error):
+            skipped += 1
+            continue
+        k = np.arange(1, kref + 1)
+        mats, c = _matrices(spec)
+        w = k * Omega
+        A = (mats["damper"] + mats["lever"])[None] + 1j * (
+            w[:, None, None] * mats["mass"][None] - mats["spring"][None] / w[:, None, None])
+        xs = np.linalg.solve(A, np.broadcast_to(c.astype(complex), (w.size, c.size))[..., None])
+        rate = _law_cycle(law, rise, dwell, ret, h, th)[1]
+        Qk = 2 * Omega * (np.fft.rfft(rate) / n)[1:kref + 1] / (xs[..., 0] @ c)
+        Q = np.real(np.exp(1j * np.outer(np.radians(r.angle_deg), k)) @ Qk)
+        peak, tail = np.abs(Q).max(), np.abs(Qk[kref // 2:]).sum()
+        off = np.abs(Q - r.Q).max() / peak
+        checked += 1
+        if off > r.error + tail / peak + 1e-12:
+            bad += 1
+            print(f"net {i}: {law}, a table of {rows} rows ({'quintic' if hermite else 'cubic'}"
+                  f") at {Omega * 30 / np.pi:.6g} rpm: off by {off:.2e}, estimated {r.error:.2e}")
+    print(f"periodic_table, seed {seed}: {checked} checked ({skipped} with no finite estimate "
+          f"or refused), {bad} beyond their estimate")
+    return bad
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("campaign", choices=("roots", "peak", "sensitivity", "periodic", "modes",
-                                         "sweep_sensitivity", "errors"))
+                                         "sweep_sensitivity", "errors", "periodic_table"))
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--count", type=int, default=100)
     args = ap.parse_args(argv)
