@@ -418,8 +418,8 @@ def _harmonics_round(circuit, motion, Omega, kmax, tol, harmonics, method, done_
     scale = _peaks(np.where(np.isfinite(head), head, 0.0), fine=False)[0]
     (roots, most), lo = roots, kmax * Omega[:, None] / 8
     above = (roots[:, 0] > lo) & (roots[:, 0] <= most * Omega[:, None])
-    with np.errstate(divide="ignore"):
-        gain = np.where(above, roots[:, 0] / lo / (2 * roots[:, 1]), 0.0).max(axis=1, initial=0)
+    with np.errstate(divide="ignore"):      # (an undamped root's ζ may be −0.0: gain ∞)
+        gain = np.where(above, roots[:, 0] / lo / abs(2 * roots[:, 1]), 0).max(axis=1, initial=0)
     window = gain * mag[:, kmax // 4:].sum(axis=1)
     done = (np.fmax(beyond, window) <= 0.25 * tol * scale) | done_anyway
     tail = np.cumsum(mag[:, ::-1], axis=1)[:, ::-1]         # Σ_{k' ≥ k}

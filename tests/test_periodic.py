@@ -318,3 +318,18 @@ def test_a_root_in_the_extrapolated_octaves_does_not_hide_the_tail(rpm):
     Q = np.fft.irfft(grid, n)[:: n // 360]
     assert np.sum(np.abs(Qk[32768:])) < 2e-6 * np.abs(Q).max()
     assert np.max(np.abs(Q - r.Q)) <= r.error * np.abs(Q).max()
+
+
+def test_an_undamped_root_above_the_octaves_keeps_k_max_growing_whatever_the_sign_of_its_zeta():
+    # ζ of an undamped root can come out as −0.0 (or −1e-17): its gain 1/(2|ζ|) is ∞ either
+    # way.  With the sign kept it was −∞ and the root was passed over.
+    from mechcirc.periodic import _harmonics_round, _prepared
+
+    circuit, motion, _ = _prepared(parse(SDOF), None)
+    Omega = np.array([rpm_to_omega(600)])
+    done = [bool(_harmonics_round(circuit, motion, Omega, 64, 1e-4, None, "auto", False,
+                                  (np.array(roots).reshape(-1, 2), 4096))[-1][0])
+            for roots in ([], [[30 * Omega[0], 0.0]], [[30 * Omega[0], -0.0]],
+                          [[30 * Omega[0], -1e-17]], [[1e4 * Omega[0], -0.0]])]
+    # (no root, or one beyond 4096 harmonics: done at 64 as the SDOF's tail allows)
+    assert done == [True, False, False, False, True]
