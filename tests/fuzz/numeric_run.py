@@ -13,6 +13,8 @@ values over several decades), drawn from ``--seed``::
     python tests/fuzz/numeric_run.py sweep_sensitivity --seed 2 --count 150
     python tests/fuzz/numeric_run.py errors --seed 2 --count 300
     python tests/fuzz/numeric_run.py periodic_table --seed 1 --count 150
+    python tests/fuzz/numeric_run.py transient --seed 1 --count 200
+    python tests/fuzz/numeric_run.py batch --seed 1 --count 100
 
 * ``roots``: every root of ``find_resonances`` within its stated error of the
   zero of det A (an anti-resonance, a pole of K) or of det [[A, c], [cᵀ, 0]]
@@ -46,7 +48,15 @@ values over several decades), drawn from ``--seed``::
 * ``periodic_table``: as ``periodic``, the cycloidal or 3-4-5 cycle given as a
   table of 181, 361 or 721 rows (the cubic spline, or the quintic Hermite with
   the law's slope and curvature), within the estimate that includes the
-  table's interpolation.
+  table's interpolation;
+* ``transient``: the linear transient of a damped network without levers
+  under a force step (exact propagation) within its ``error`` of scipy's
+  DOP853 at rtol 1e-12 on M ẍ + D ẋ + K x = f assembled here, plus ten times
+  that reference's own change from rtol 1e-11;
+* ``batch``: six designs of each network (its first three values made
+  ``.param``\ s, scaled by up to 10^±0.5) through ``mechcirc.designs``: K of
+  the batched sweep within its ``error`` of K in mpmath, and the batched roots
+  within their errors of the determinants' zeros, design by design.
 
 Each prints the cases outside their tolerance and a summary line.
 """
@@ -450,10 +460,100 @@ def periodic_table(seed: int, count: int) -> int:
     return bad
 
 
+def transient(seed: int, count: int) -> int:
+    from scipy.integrate import solve_ivp
+
+    from mechcirc.transient import transient as run
+
+    rng = np.random.default_rng(seed)
+    bad = checked = 0
+    for i in range(count):                  # (no levers: the reference has no constraints)
+        text, spec, wc = mp_nodal.random_network(rng, n_nodes=int(rng.integers(2, 6)),
+                                                 damped=True, decades=float(rng.uniform(1, 4)))
+        mats, _ = _matrices(spec)
+        M, D, K = (mats[k] for k in ("mass", "damper", "spring"))
+        if np.linalg.cond(M) > 1e8:         # (massless nodes: not an ODE in x here)
+            continue
+        names = sorted({x for _, a, b, _ in spec["elements"] for x in (a, b)} - {"0"})
+        f = np.zeros(len(names))
+        f[names.index("n1")] = 1.0
+        Minv = np.linalg.inv(M)
+        T = 20 / wc
+        try:
+            r = run(mechcirc.parse(text.replace("velocity=1", "force=1")), T, T / 400, "step")
+        except mechcirc.MechcircError:
+            continue
+
+        def rhs(t, y, f=f, Minv=Minv, D=D, K=K):
+            n = f.size
+            return np.concatenate([y[n:], Minv @ (f - D @ y[n:] - K @ y[:n])])
+
+        ref, loose = (solve_ivp(rhs, (0, r.time[-1]), np.zeros(2 * len(names)), method="DOP853",
+                                rtol=tol, atol=1e-22, t_eval=r.time).y[:len(names)].T
+                      for tol in (1e-12, 1e-11))
+        x = r.x[:, [r.nodes.index(nm) for nm in names]]
+        scale = np.max(np.abs(ref))
+        off, own = np.max(np.abs(x - ref)) / scale, 10 * np.max(np.abs(loose - ref)) / scale
+        checked += 1
+        if off > r.error + own:
+            bad += 1
+            print(f"net {i}: x off by {off:.2e} of its largest, estimated {r.error:.2e} "
+                  f"(the reference's own allowance {own:.1e})")
+    print(f"transient, seed {seed}: {checked} networks checked, {bad} beyond their estimate")
+    return bad
+
+
+def batch(seed: int, count: int, designs: int = 6) -> int:
+    rng = np.random.default_rng(seed + 4000)
+    bad = checked = 0
+    for i, text, spec, wc in networks(seed, count):
+        lines = text.splitlines()
+        base = [v for _, _, _, v in spec["elements"][:3]]
+        for t in range(3):                  # the first three values become .params
+            lines[t + 1] = " ".join(lines[t + 1].split()[:4] + [f"{{p{t}}}"])
+        text = "\n".join([f".param p{t}={v!r}" for t, v in enumerate(base)] + lines) + "\n"
+        scale = 10 ** rng.uniform(-0.5, 0.5, (3, designs))
+        params = {f"p{t}": base[t] * scale[t] for t in range(3)}
+        w = np.sort(wc * 10 ** rng.uniform(-1.5, 1.5, 4))
+        try:
+            ds = mechcirc.designs(text, params)
+            sw, res = ds.sweep(w), ds.resonances()
+        except mechcirc.MechcircError:      # e.g. levers that hold the drive
+            continue
+        for d in range(designs):
+            one = {**spec, "elements": [(k, a, b, float(params[f"p{t}"][d]) if t < 3 else v)
+                                        for t, (k, a, b, v) in enumerate(spec["elements"])]}
+            for k in range(w.size) if d not in sw.failed else ():
+                ref = complex(mp_nodal.K(one, 1j * w[k], 40))
+                if not np.isfinite(sw.error[d, k]) or ref == 0 or not np.isfinite(abs(ref)):
+                    continue
+                checked += 1
+                if abs(sw.K[d, k] - ref) > sw.error[d, k] * abs(ref):
+                    bad += 1
+                    print(f"net {i} design {d}: K at {w[k]:.6g} off by "
+                          f"{abs(sw.K[d, k] - ref) / abs(ref):.2e}, its error {sw.error[d, k]:.2e}")
+            for j in range(int(res.count[d])) if d not in res.failed else ():
+                kind, wn, wd, z, e = (res.kind[d, j], res.omega[d, j], res.omega_d[d, j],
+                                      res.zeta[d, j], res.error[d, j])
+                try:
+                    root = mp_nodal.det_root(one, complex(-z * wn, wd), kind == "antiresonance")
+                except (ValueError, ZeroDivisionError):     # no reference: not counted
+                    continue
+                checked += 1
+                if not abs(abs(root) - wn) <= e * abs(root):
+                    bad += 1
+                    print(f"net {i} design {d}: {kind} {wn!r} error {e:.2e}, true "
+                          f"{abs(abs(root) - wn) / abs(root):.2e}")
+    print(f"batch, seed {seed}: {count} networks of {designs} designs, {checked} values of K "
+          f"and roots checked, {bad} outside their error")
+    return bad
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("campaign", choices=("roots", "peak", "sensitivity", "periodic", "modes",
-                                         "sweep_sensitivity", "errors", "periodic_table"))
+                                         "sweep_sensitivity", "errors", "periodic_table",
+                                         "transient", "batch"))
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--count", type=int, default=100)
     args = ap.parse_args(argv)
