@@ -127,3 +127,15 @@ def test_a_table_too_large_for_float64_slopes_is_located(tmp_path, capsys):
         "drive V0 T 0 motion=lift.csv"))
     assert_user_error(["periodic", net, "--rpm", "600"], capsys,
                       f"lift.csv:{k + 1}:4: error: the spline through the table is not finite")
+
+
+def test_a_circuit_without_resonances_lists_its_harmonics_without_nan(tmp_path, capsys):
+    # A mass alone at the drive has no resonance: the table's last two columns were
+    # "nan +nan%"; they are dashes now, the harmonics' own numbers as before.
+    path = tmp_path / "mass.mcir"
+    path.write_text("drive V T 0 motion=cycloidal rise=90 dwell=30 return=90 stroke=10 mm\n"
+                    "mass m T 0 2\n")
+    status, text, _ = run(["periodic", str(path), "--rpm", "600"], capsys)
+    assert status == 0 and "+nan%" not in text and " nan " not in text
+    rows = [line.split() for line in text.splitlines() if line.strip().startswith("1 ")]
+    assert rows and rows[0][-2:] == ["—", "—"] and float(rows[0][1]) == pytest.approx(62.8319)

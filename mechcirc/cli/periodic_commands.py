@@ -142,10 +142,11 @@ def _one_speed(args, circuit, elements, motion) -> int:
     top = np.argsort(-np.nan_to_num(np.abs(r.amplitude), nan=np.inf))[:8]
     print(f"  {'k':>5} {f'kΩ [{fu}]':>12} {f'|V_k| [{vu}]':>12} {f'|Q_k| [{unit}]':>12} "
           f"{'nearest ωn':>12} {'distance':>9}")
-    for i in sorted(top):
+    for i in sorted(top):           # (no resonance known: dashes, not "nan +nan%")
+        res = (f"{'—':>12} {'—':>9}" if np.isnan(r.nearest[i]) else
+               f"{in_unit(r.nearest[i], fu):>12.6g} {r.distance[i]:>+9.2%}")
         print(f"  {r.k[i]:>5} {in_unit(r.omega[i], fu):>12.6g} {abs(r.V[i]):>12.4g} "
-              f"{abs(r.amplitude[i]):>12.4g} {in_unit(r.nearest[i], fu):>12.6g} "
-              f"{r.distance[i]:>+9.2%}")
+              f"{abs(r.amplitude[i]):>12.4g} {res}")
     if r.harmonics > top.size:
         print(f"  (the {top.size} largest of {r.harmonics} harmonics; --json lists all)")
     for name in elements:
