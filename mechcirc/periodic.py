@@ -398,7 +398,7 @@ def _harmonics_round(circuit, motion, Omega, kmax, tol, harmonics, method, done_
 
     The tail beyond k_max is extrapolated from the last two octaves, which a root of K
     (``roots``: its (ωₙ, ζ) rows, and the most harmonics) in or above them bends: an
-    anti-resonance in them hid a resonance's tail 18 times the estimate.  Such a root
+    anti-resonance in them hid a tail 18 times the estimate beyond it.  Such a root
     leaves a speed not done unless those octaves' sum, raised by its gain (the rise of
     |1/K| up to it, at most ∝ ω, times 1/(2ζ) at a resonance), is still small."""
     P = Omega.size
