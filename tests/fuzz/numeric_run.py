@@ -15,6 +15,7 @@ values over several decades), drawn from ``--seed``::
     python tests/fuzz/numeric_run.py periodic_table --seed 1 --count 150
     python tests/fuzz/numeric_run.py transient --seed 1 --count 200
     python tests/fuzz/numeric_run.py batch --seed 1 --count 100
+    python tests/fuzz/numeric_run.py peak_k --seed 3 --count 300
 
 * ``roots``: every root of ``find_resonances`` within its stated error of the
   zero of det A (an anti-resonance, a pole of K) or of det [[A, c], [cᵀ, 0]]
@@ -140,39 +141,52 @@ def _golden_max(f, a, b, steps=80):
     return 0.5 * (a + b), f(0.5 * (a + b))
 
 
-def peak(seed: int, count: int) -> int:
+def peak(seed: int, count: int, quantity: str = "Q0") -> int:
     bad = refused = 0
     for i, text, spec, wc in networks(seed, count, damped=True):
         lo, hi = wc / 100, wc * 100
         try:
-            p = mechcirc.peak(mechcirc.parse(text), lo, hi)
+            p = mechcirc.peak(mechcirc.parse(text), lo, hi, quantity)
         except mechcirc.MechcircError:      # e.g. levers that hold the drive
             refused += 1
             continue
         if p.unbounded:
             continue
         mats, c = _matrices(spec)
+        power = -1 if quantity == "K" else 1        # |Q0| = |S| = 1/|K| at V0 = 1
+
+        def f(x, mats=mats, c=c, power=power):
+            return _q0(mats, c, x) ** power
+
         w = np.geomspace(lo, hi, 40000)
-        q = np.nan_to_num(_q0(mats, c, w), nan=0.0, posinf=0.0)
+        q = np.nan_to_num(f(w), nan=0.0, posinf=0.0)
         local = np.flatnonzero((q[1:-1] >= q[:-2]) & (q[1:-1] >= q[2:])) + 1
         best, at_best = q.max(), w[np.argmax(q)]
         for k in local[np.argsort(q[local])[-5:]]:
-            x, v = _golden_max(lambda x, mats=mats, c=c: _q0(mats, c, x)[0], w[k - 1], w[k + 1])
+            x, v = _golden_max(lambda x, f=f: f(x)[0], w[k - 1], w[k + 1])
             if v > best:
                 best, at_best = v, x
-        at = _q0(mats, c, p.omega)[0]
+        at = f(p.omega)[0]
         if not (best > p.value * (1 + 1e-8) or abs(at - p.value) > 1e-6 * p.value):
             continue
         # float64's solve can be off by 1e-5 where levers make A ill-conditioned:
         # the suspects again in mpmath (40 digits)
-        best, at = (float(1 / abs(mp_nodal.K(spec, 1j * x, 40))) for x in (at_best, p.omega))
+        best, at = (float(abs(mp_nodal.K(spec, 1j * x, 40)) ** -power) for x in (at_best, p.omega))
         if best > p.value * (1 + 1e-8) or abs(at - p.value) > 1e-10 * p.value:
             bad += 1
-            print(f"net {i}: peak {p.value:.10g} at {p.omega:.8g} (|Q0| there {at:.10g}); "
-                  f"scan {best:.10g} at {at_best:.8g}; note {p.note!r}")
-    print(f"peak, seed {seed}: {count} networks ({refused} refused), {bad} below the scan "
-          "or off their own value")
+            print(f"net {i}: peak {p.value:.10g} at {p.omega:.8g} (|{quantity}| there "
+                  f"{at:.10g}); scan {best:.10g} at {at_best:.8g}; note {p.note!r}")
+    print(f"peak of |{quantity}|, seed {seed}: {count} networks ({refused} refused), {bad} "
+          "below the scan or off their own value")
     return bad
+
+
+def peak_k(seed: int, count: int) -> int:
+    return peak(seed, count, "K")
+
+
+def peak_s(seed: int, count: int) -> int:
+    return peak(seed, count, "S")
 
 
 def _scaled(spec, name: str, factor: float):
@@ -525,7 +539,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("campaign", choices=("roots", "peak", "sensitivity", "periodic", "modes",
                                          "sweep_sensitivity", "errors", "periodic_table",
-                                         "transient", "batch"))
+                                         "transient", "batch", "peak_k", "peak_s"))
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--count", type=int, default=100)
     args = ap.parse_args(argv)
