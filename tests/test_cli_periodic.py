@@ -139,3 +139,12 @@ def test_a_circuit_without_resonances_lists_its_harmonics_without_nan(tmp_path, 
     assert status == 0 and "+nan%" not in text and " nan " not in text
     rows = [line.split() for line in text.splitlines() if line.strip().startswith("1 ")]
     assert rows and rows[0][-2:] == ["—", "—"] and float(rows[0][1]) == pytest.approx(62.8319)
+
+
+def test_a_speed_map_without_resonances_says_it_crosses_none(tmp_path, capsys):
+    path = tmp_path / "mass.mcir"
+    path.write_text("drive V T 0 motion=cycloidal rise=90 dwell=30 return=90 stroke=10 mm\n"
+                    "mass m T 0 2\n")
+    status, text, _ = run(["periodic", str(path), "--rpm-min", "200", "--rpm-max", "400",
+                           "--points", "3"], capsys)
+    assert status == 0 and "(k·Ω = ωn; 0 of 0 with" in text and ": none in this range" in text

@@ -205,7 +205,8 @@ def _speed_map(args, circuit, elements, motion) -> int:
               f"{m.peak[hi]:.6g} {unit} at {m.rpm[hi]:.6g} rpm")
     strong = [c for c in crossings if c["weight"] >= 1e-3]
     print(f"  speeds where a harmonic meets a resonance (k·Ω = ωn; {len(strong)} of "
-          f"{len(crossings)} with a harmonic of at least 1e-3 of the drive velocity):")
+          f"{len(crossings)} with a harmonic of at least 1e-3 of the drive velocity)"
+          + (":" if crossings else ": none in this range"))
     for c in strong[:30]:
         print(f"    {c['rpm']:10.6g} rpm: k = {c['k']:>3}, ωn = "
               f"{in_unit(c['omega_n'], args.unit):.6g} {args.unit} "

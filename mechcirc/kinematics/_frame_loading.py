@@ -310,8 +310,7 @@ def _equilibrium(k, crank, coupler, rocker, F, g):
     """The 9×9 d'Alembert equilibrium of the three links per angle: (M, rhs), with
     unknowns [FAx, FAy, FBx, FBy, FCx, FCy, FDx, FDy, T] (k: :func:`link_kinematics`)."""
     n = len(F)
-    M = np.zeros((n, 9, 9))
-    rhs = np.zeros((n, 9))
+    M, rhs = np.zeros((n, 9, 9)), np.zeros((n, 9))
 
     # per link: rows r, r + 1 its force balance, r + 2 its moments about its centre of
     # mass G; its two joint forces (columns c, c + 1) act on it with the sign given
