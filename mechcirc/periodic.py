@@ -454,9 +454,9 @@ def _not_met(N, error, table_error, tol) -> list[str]:
         why = (f"{table_error[i]:.2g} of it is the table's interpolation, estimated from "
                "the spline through every other row: give a finer table")
     elif math.isinf(error[i]):
-        why = ("|Q_k| falls more slowly than 1/k, too slowly to bound the tail: the force "
-               "has impulses, as where a mass at the drive follows a motion whose velocity "
-               "jumps")
+        why = ("|Q_k| does not fall in the last octaves, so the tail cannot be bounded: a "
+               "resonance or anti-resonance of K lies there, or the force has impulses (a "
+               "mass at the drive following a motion whose velocity jumps)")
     else:
         why = ("the force's harmonics fall off slowly: a mass or a stiff path at the "
                "drive sees the jumps of the motion's acceleration or jerk (where the force "

@@ -333,3 +333,17 @@ def test_an_undamped_root_above_the_octaves_keeps_k_max_growing_whatever_the_sig
                           [[30 * Omega[0], -1e-17]], [[1e4 * Omega[0], -0.0]])]
     # (no root, or one beyond 4096 harmonics: done at 64 as the SDOF's tail allows)
     assert done == [True, False, False, False, True]
+
+
+def test_octave_sums_that_grow_give_no_estimate_and_the_note_names_both_causes():
+    # cam_drive at 250 rpm with 43 harmonics fixed: the octaves k = 43 … 172 hold the
+    # anti-resonance (k = 56.8) beyond which |Q_k| grows, so no tail can be extrapolated.
+    # The note said only "impulses", which this force does not have.
+    from pathlib import Path
+
+    from mechcirc import load
+
+    r = periodic(load(Path(__file__).parents[1] / "docs/examples/cam_drive.mcir"), 250,
+                 harmonics=43)
+    assert math.isinf(r.error)
+    assert any("a resonance or anti-resonance of K lies there" in n for n in r.notes)
