@@ -400,7 +400,7 @@ def _harmonics_round(circuit, motion, Omega, kmax, tol, harmonics, method, done_
     (``roots``: its (ωₙ, ζ) rows, and the most harmonics) in or above them bends: an
     anti-resonance in them hid a tail 18 times the estimate beyond it.  Such a root
     leaves a speed not done unless those octaves' sum, raised by its gain (the rise of
-    |1/K| up to it, at most ∝ ω, times 1/(2ζ) at a resonance), is still small."""
+    |1/K| up to it, at most ∝ ω, times 1/(2|ζ|) at a resonance), is still small."""
     P = Omega.size
     c = motion.fourier(kmax)
     k = np.arange(1, kmax + 1)
@@ -418,9 +418,9 @@ def _harmonics_round(circuit, motion, Omega, kmax, tol, harmonics, method, done_
     scale = _peaks(np.where(np.isfinite(head), head, 0.0), fine=False)[0]
     (roots, most), lo = roots, kmax * Omega[:, None] / 8
     above = (roots[:, 0] > lo) & (roots[:, 0] <= most * Omega[:, None])
-    with np.errstate(divide="ignore"):      # (an undamped root's ζ may be −0.0: gain ∞)
+    with np.errstate(divide="ignore", invalid="ignore"):   # (ζ may be −0.0: gain ∞; ∞·0 NaN)
         gain = np.where(above, roots[:, 0] / lo / abs(2 * roots[:, 1]), 0).max(axis=1, initial=0)
-    window = gain * mag[:, kmax // 4:].sum(axis=1)
+        window = gain * mag[:, kmax // 4:].sum(axis=1)
     done = (np.fmax(beyond, window) <= 0.25 * tol * scale) | done_anyway
     tail = np.cumsum(mag[:, ::-1], axis=1)[:, ::-1]         # Σ_{k' ≥ k}
     tail = np.concatenate([tail[:, 1:], np.zeros((P, 1))], axis=1) + beyond[:, None]
