@@ -471,16 +471,20 @@ def _resonances(circuit, omega_max, notes, kind="resonance"):
     """(ωₙ, ζ, error) of the resonances (K = 0; ``kind=None``: and anti-resonances) up to
     ``omega_max``; a note if they cannot be had.
 
-    Kept on the circuit (they do not depend on the speed), as its reduction is."""
+    Kept on the circuit (they do not depend on the speed), as its reduction is; a refusal
+    too, for bands as wide or wider (a speed map's chunks ask for the same band)."""
     def make():
-        return omega_max, [(r.omega, r.zeta, r.error, r.kind) for r in
-                           circuit.resonances(omega_max=omega_max)]
-    try:
-        cached = circuit.memo("_periodic_resonances", make, lambda c: c[0] >= omega_max)
-    except MechcircError as exc:
-        notes.append(f"resonances not computed ({exc}); harmonics are not named")
+        try:
+            return omega_max, [(r.omega, r.zeta, r.error, r.kind) for r in
+                               circuit.resonances(omega_max=omega_max)]
+        except MechcircError as exc:
+            return omega_max, exc
+    _, found = circuit.memo("_periodic_resonances", make, lambda c: c[0] >= omega_max
+                              if isinstance(c[1], list) else c[0] <= omega_max)
+    if isinstance(found, MechcircError):
+        notes.append(f"resonances not computed ({found}); harmonics are not named")
         return []
-    return [r[:3] for r in cached[1] if r[0] <= omega_max and kind in (None, r[3])]
+    return [r[:3] for r in found if r[0] <= omega_max and kind in (None, r[3])]
 
 
 def _validate(rpm, tol, harmonics):

@@ -347,3 +347,26 @@ def test_octave_sums_that_grow_give_no_estimate_and_the_note_names_both_causes()
                  harmonics=43)
     assert math.isinf(r.error)
     assert any("a resonance or anti-resonance of K lies there" in n for n in r.notes)
+
+
+def test_a_refused_resonance_search_is_not_asked_again_for_the_same_band(monkeypatch):
+    # A speed map solves 256 speeds at a time, each chunk asking for the roots up to 4096
+    # harmonics of its fastest speed: a refusal (e.g. more roots than the band solver
+    # takes) was asked again by every chunk (four times here, with the crossings).
+    from mechcirc.circuit import Circuit
+    from mechcirc.errors import SolverError
+
+    asked = []
+
+    def refuse(self, omega_max=None, kind=None):
+        asked.append(omega_max)
+        raise SolverError("too many roots in the band")
+
+    monkeypatch.setattr(Circuit, "resonances", refuse)
+    m = speed_map(parse(SDOF), 200, 900, 600)
+    # Once for the chunks (the first one's band, 4096 harmonics of its fastest speed; the
+    # later chunks ask wider bands, which a narrower band's refusal answers), once for the
+    # crossings' narrower band, which a search may find where the wider one was refused.
+    first = 4096 * rpm_to_omega(np.linspace(200, 900, 600)[255])
+    assert len(asked) == 2 and asked[0] == pytest.approx(first) and asked[1] < asked[0]
+    assert any("resonances not computed" in n for n in m.notes)

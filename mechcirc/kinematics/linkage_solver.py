@@ -820,8 +820,7 @@ class _DyadSolver:
         signs = _signs(pl, cross, t) if cross else None
         N = len(t)
         E = np.ones((pl.nb + 1, N), dtype=complex)          # e^{iφ}; the ground last
-        phi = np.zeros((pl.nb + 1, N))
-        r = np.zeros((pl.nb + 1, N), dtype=complex)
+        phi, r = np.zeros((pl.nb + 1, N)), np.zeros((pl.nb + 1, N), dtype=complex)
         inner = []
         margin = np.full(N, np.inf)
         for j, (c, ci) in enumerate(zip(lk.cranks, pl.crank_idx)):
@@ -1154,8 +1153,7 @@ class Newton:
         """Batched Newton from q (N, n); returns (q, converged mask)."""
         q = q.copy()
         previous = np.full(len(q), np.inf)
-        active = np.ones(len(q), dtype=bool)
-        ok = np.zeros(len(q), dtype=bool)
+        active, ok = np.ones(len(q), dtype=bool), np.zeros(len(q), dtype=bool)
         for k in range(max_iter):
             idx = np.flatnonzero(active)
             if idx.size == 0:

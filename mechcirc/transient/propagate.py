@@ -148,8 +148,7 @@ def propagate_blocks(A, B, z0, u, h, block: int | None = None) -> np.ndarray:
     ub = up[:-1].reshape(nb, L)
     dub = np.diff(up).reshape(nb, L)
     # Input responses h_m = Φᵐ Γ for m < L (matrix-vector products).
-    H1 = np.empty((L, N))
-    H2 = np.empty((L, N))
+    H1, H2 = np.empty((L, N)), np.empty((L, N))
     H1[0], H2[0] = G1, G2
     for m in range(1, L):
         H1[m] = Phi @ H1[m - 1]
