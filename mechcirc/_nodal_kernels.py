@@ -569,8 +569,7 @@ def sensitivities(omega, x, scale, e_i, e_j, e_m, e_k, e_c, s_row, s_col, s_val,
     nb = SOLVE_BLOCK
     xr, xi = np.zeros((n + 1, nb)), np.zeros((n + 1, nb))   # x/scale, the reference's 0 at n
     mag = np.zeros((n + 1, nb))             # |x_i|/scale
-    W = np.ones(nb)
-    acc = np.empty((2, nb))
+    W, acc = np.ones(nb), np.empty((2, nb))
     for k0 in range(0, n_w, nb):
         m = min(nb, n_w - k0)               # (past m, the last block's stale ω: unused)
         for b in range(m):                  # once per unknown, not per element end

@@ -227,8 +227,7 @@ class Pattern:
             q_l = q_l + self.s_val * xle[:, self.s_col]
         T_h = np.concatenate([p_h, -p_h, q_h], axis=1)
         T_l = np.concatenate([p_l, -p_l, q_l], axis=1)
-        S_h = np.zeros((c, 4 * n), dtype=complex)
-        S_l = np.zeros((c, 4 * n), dtype=complex)
+        S_h, S_l = np.zeros((c, 4 * n), dtype=complex), np.zeros((c, 4 * n), dtype=complex)
         slots, buckets = self.slot_plan
         if slots:
             acc_h, acc_l = T_h[:, slots[0]], T_l[:, slots[0]]

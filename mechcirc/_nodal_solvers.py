@@ -303,8 +303,7 @@ def band_lu_batch(G, n, kl):
         ok (B,): False where a pivot is 0 or not finite (singular).
     """
     B = G.shape[2]
-    piv = np.zeros((n, B), dtype=np.int8)
-    best = np.empty((n, B))
+    piv, best = np.zeros((n, B), dtype=np.int8), np.empty((n, B))
     e = 3 * kl + 1
     with np.errstate(all="ignore"):
         for j in range(n):

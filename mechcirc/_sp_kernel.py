@@ -349,8 +349,7 @@ def evaluate_plan(omega, kind, cplx, c_real, c_inv, c_om, e_real, e_inv, e_om, m
     M = kind.shape[0]
     # Per node: re, im, |K|, 1/|K| (a parallel parent's weight) and ρ over a block
     # of ω; per block: the sums and ω, 1/ω.  Allocated once for all designs.
-    work = np.empty((5, n_slots, BLOCK))
-    vec = np.empty((7, BLOCK))
+    work, vec = np.empty((5, n_slots, BLOCK)), np.empty((7, BLOCK))
     for d in range(K.shape[0]):
         dw = d if omega.shape[0] > 1 else 0
         rd = d if want_error else 0

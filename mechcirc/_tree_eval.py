@@ -359,8 +359,7 @@ def _leaf_table() -> tuple:
     coefficient / (value·η) when ``divides`` (an impedance, in a series node),
     else coefficient · (value·η); slots as in :func:`_leaf_term` (0 real, +1 ω,
     −1 1/ω)."""
-    slot = np.zeros((len(_KIND_CODE), 2), dtype=np.int64)
-    coef = np.zeros((len(_KIND_CODE), 2))
+    slot, coef = np.zeros((len(_KIND_CODE), 2), dtype=np.int64), np.zeros((len(_KIND_CODE), 2))
     for kind, code in _KIND_CODE.items():
         for series in (0, 1):
             slot[code, series], coef[code, series] = _slot_term(

@@ -398,8 +398,7 @@ class Designs(Memos):
         R = max([w.shape[1] if w.ndim == 2 else 0] + [len(v) for v in alone.values()])
         live = np.isfinite(w)
         kind = np.full((D, R), "", dtype="<U13")
-        out = np.full((4, D, R), np.nan)
-        count = np.zeros(D, dtype=np.int64)
+        out, count = np.full((4, D, R), np.nan), np.zeros(D, dtype=np.int64)
         if which.size:
             r = w.shape[1]
             count[which] = live.sum(axis=1)

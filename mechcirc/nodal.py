@@ -479,8 +479,7 @@ def refine_dd(solve_fn, residual, omega, rhs, system, refine: bool, steps: int,
     xh = x0
     xl: Any = np.zeros_like(x0) if steps < 1 else None
     prev: Any = None
-    est = np.full(omega.size, np.inf)
-    rho = np.zeros(omega.size)
+    est, rho = np.full(omega.size, np.inf), np.zeros(omega.size)
     active = np.arange(omega.size)
     for step in range(steps):
         # Only the points not yet converged take a further step (their

@@ -1137,8 +1137,7 @@ def secant_steps(g_and_delta, admissible, s0, e0, offset, active=True, iteration
     # seed 4: K = 1e18 (bound inf) at s0 gave a slope that "converged" 1e-9 off, error 2.2e-16
     known = (np.isfinite(da) | (ga == 0)) & (np.isfinite(db) | (gb == 0))
     active = active & np.isfinite(ga) & np.isfinite(gb) & known
-    step = np.full(b.shape, np.inf)
-    slope = np.full(b.shape, np.nan, dtype=np.result_type(b, ga))
+    step, slope = np.full(b.shape, np.inf), np.full(b.shape, np.nan, dtype=np.result_type(b, ga))
     for _ in range(iterations):
         if not active.any():
             break

@@ -354,8 +354,7 @@ class FourBar:
     def _raw(self, theta):
         """Unwrapped-by-branch rocker angle and the cosine of angle BDC (vectorised)."""
         a, d = self.crank, self.frame
-        bx = a * np.cos(theta) - d
-        by = a * np.sin(theta)
+        bx, by = a * np.cos(theta) - d, a * np.sin(theta)
         return bx, by, self._cos_bdc(bx * bx + by * by)
 
     def _cos_bdc(self, e2):
@@ -430,8 +429,7 @@ class FourBar:
         phi4 = ref + _wrap(raw - ref)
         # (bx, by) is B relative to D and C = D + c e^{iφ4}: coupler direction B→C
         phi3 = np.arctan2(c * np.sin(phi4) - by, c * np.cos(phi4) - bx)
-        s43 = np.sin(phi4 - phi3)
-        c43 = np.cos(phi4 - phi3)
+        s43, c43 = np.sin(phi4 - phi3), np.cos(phi4 - phi3)
         with np.errstate(divide="ignore", invalid="ignore"):     # s43 = 0: a singular position
             mu = a * np.sin(theta - phi3) / (c * s43)
             mu3 = a * np.sin(theta - phi4) / (b * s43)

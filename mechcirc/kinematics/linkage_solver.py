@@ -1264,8 +1264,7 @@ def _solve_newton_compiled(lk, pl, t, dt_max, q0, t0):
 
     N, n, nc = len(t), 3 * pl.nb, len(pl.crank_idx)
     Q, QD, QDD = np.empty((N, n)), np.empty((N, n)), np.empty((N, n))
-    parts = np.empty((N, n, nc))
-    info = np.zeros(2)
+    parts, info = np.empty((N, n, nc)), np.zeros(2)
     w1 = lk.cranks[0].omega
     vec = np.zeros((6, n))          # the kernel's scratch: it allocates nothing
     vec[0] = q0

@@ -652,8 +652,7 @@ def rk_run(y, t0, h, nsteps, t_out0, dt_out, rec_y, rec_t, PV, FI, FF, tabs, MI_
     m = n // 2 if quintic else 0
     s = TB.shape[0]
     K = np.zeros((s + 1, n))
-    tmp = np.empty(n)
-    ynew = np.empty(n)
+    tmp, ynew = np.empty(n), np.empty(n)
     aux = np.empty(naux + EI.shape[0])     # + the elements' rates, for regions
     auxl = np.empty(aux.shape[0])          # the cuts' locations' (aux stays at ynew)
     work = np.zeros((9, max(FI.shape[0], PRIG.shape[0])))

@@ -948,8 +948,7 @@ def _deviation_rhs(model, kern, theta_s, ripple):
         """The subtracted motion (lines only) at t, a row at each of an array of times,
         and its derivative (the same at every t)."""
         th = theta_s + omega * t
-        y = np.zeros(getattr(t, "shape", ()) + (2 * n,))
-        yd = np.zeros(2 * n)
+        y, yd = np.zeros(getattr(t, "shape", ()) + (2 * n,)), np.zeros(2 * n)
         for i, c0, c1 in lines:
             y[..., i], y[..., n + i] = c0 + c1 * th, c1 * omega
             yd[i] = c1 * omega

@@ -37,13 +37,14 @@ import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.linalg as la
 
 from ..circuit import Circuit
 from ..errors import MechcircError
 from ..identify import fit_sinusoid, judge_pole, nearest_pole, pole_of, pole_weights, poles
 from ..verdict import DISAGREES, checked_repr, judge, summarise
 from .model import backlash_elements, drive_map
-from .propagate import ROUNDING_PER_STEP
+from .propagate import ROUNDING_PER_STEP, map_error
 from .simulate import periodic_start, state_model, transient, with_oscillator
 from .waveform import Waveform
 
@@ -185,23 +186,32 @@ def _judge_mode(row: dict, r, others, s: np.ndarray, parts: tuple, dt: float) ->
         row["decay_rel_error"] = float(abs(row["decay"] - sigma) / sigma)
 
 
-def _output_rounding(circuit, w, steps, amp):
+def _output_rounding(circuit, w, h, steps, amp):
     """Rounding of the drive's output y = row·z of a steady run, mode by mode.
 
     In the eigenbasis of the run's matrix (the circuit's with the drive's
     oscillator), mode j of amplitude |q_j| is propagated with rounding of its
     own size per step and reaches y through Σ_i |row_i| |V_ij|: a heavily
     weighted small state (a massless damped node, k/c) takes rounding from
-    the large modes too.  Bound: 10 · steps · 8ε · Σ_j (Σ_i |row_i||V_ij|) |q_j|.
+    the large modes too.  Bound: steps · δ · Σ_j (Σ_i |row_i||V_ij|) |q_j|, δ the
+    one-step map's error measured beside a stiff mode (:func:`~.propagate.map_error`),
+    at least 10 × 8ε.  Without independent eigenvectors (a defective matrix: rigid and
+    repeated modes) every state takes the rounding of the largest:
+    steps · δ · Σ_i |row_i| · max|z₀|.
     """
     ss = state_model(circuit, True)
     z0 = periodic_start(ss, Waveform("harmonic", omega=w), amp, circuit, True)
     aug, z0 = with_oscillator(ss, z0, w, amp)
     row = drive_map(aug)[0]
+    per_step = steps * max(10 * ROUNDING_PER_STEP, map_error(aug.A, aug.B, h))
     V = np.linalg.eig(aug.A)[1]
-    q = np.linalg.solve(V, z0.astype(complex))
+    try:
+        with warnings.catch_warnings(action="error", category=la.LinAlgWarning):
+            q = la.solve(V, z0.astype(complex))
+    except (la.LinAlgError, la.LinAlgWarning):
+        return per_step * float(np.abs(row).sum() * np.abs(z0).max())
     reach = np.abs(row) @ np.abs(V)
-    return 10 * steps * ROUNDING_PER_STEP * float(reach @ np.abs(q))
+    return per_step * float(reach @ np.abs(q))
 
 
 def crosscheck(circuit: Circuit, omega_max: float | None = None,
@@ -293,7 +303,7 @@ def _steady(circuit: Circuit, omegas: list, sweep, out: CrossCheck, progress) ->
         assert y is not None            # a driven circuit's run has the drive's output
         t = run.time
         # the time domain's own rounding of y (heavily weighted small states)
-        tol = max(tol, _output_rounding(circuit, w, t.size - 1, d.amplitude) / exp)
+        tol = max(tol, _output_rounding(circuit, w, t[1] - t[0], t.size - 1, d.amplitude) / exp)
         measured, departure = fit_sinusoid(t, y, w)
         row["measured"] = float(measured)
         rel = row["rel_error"] = float(abs(measured - exp) / exp)

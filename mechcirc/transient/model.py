@@ -342,8 +342,7 @@ def _initial(circuit, nodes, index, Cx, Cv, N, vel):
     # Rows x and v of every node (drive at rest, u = 0).  The named nodes'
     # values are met first (least squares if not attainable); the freedom left
     # keeps the other nodes as close to rest as it can.
-    Mat = np.vstack([Cx, Cv])
-    rhs = np.concatenate([x0, v0])
+    Mat, rhs = np.vstack([Cx, Cv]), np.concatenate([x0, v0])
     cols = np.ones(N, bool)
     d = circuit.drive
     if vel and not any(nd in (d.n1, d.n2) for nd, _, _ in circuit.initial):
@@ -354,8 +353,7 @@ def _initial(circuit, nodes, index, Cx, Cv, N, vel):
     # Lexicographic least squares: named rows, then the other nodes' x, then their v
     # (a massless damped node's velocity follows from the displacements).
     is_x = np.arange(2 * n) < n
-    zp = np.zeros(Mz.shape[1])
-    Nn = np.eye(Mz.shape[1])
+    zp, Nn = np.zeros(Mz.shape[1]), np.eye(Mz.shape[1])
     for group in (rows, ~rows & is_x, ~rows & ~is_x):
         if not group.any() or Nn.shape[1] == 0:
             continue

@@ -28,7 +28,7 @@ from ..circuit import Circuit, units_of
 from ..errors import MechcircError, NetlistError
 from ..sources import positive_number
 from .model import StateSpace, backlash_elements, drive_map, incidence, state_space
-from .propagate import ROUNDING_PER_STEP, drive_gain, kernels, propagate_linear
+from .propagate import drive_gain, kernels, map_error, propagate_linear
 from .result import TransientResult
 from .waveform import Waveform, parse_waveform
 
@@ -180,14 +180,18 @@ def _linear_run(ss, circuit, z0, t, us, drive, notes, elements, velocities):
 def _linear_error(out: TransientResult, ss: StateSpace, err: float,
                   x_bound: float | None) -> float:
     """Error of an exact (linear) run: ``err`` plus rounding, which adds up over
-    the steps: ROUNDING_PER_STEP × max|x| per step (against closed forms: 3e-15 …
-    1.5e-12 relative after 2e3 … 1e5 steps, 4 … 150× below this).  ``x_bound``
-    bounds max|x| (None: look at x)."""
+    the steps: the one-step map's error (:func:`~.propagate.map_error`, at least
+    ROUNDING_PER_STEP) × max|x| per step (against closed forms: 3e-15 … 1.5e-12
+    relative after 2e3 … 1e5 steps, 4 … 150× below this).  ``x_bound`` bounds max|x|
+    (None: look at x)."""
+    h = float(out.time[1] - out.time[0]) if out.time.size > 1 else 0.0
+    known = ss.memo("_map_errors", dict)        # (by step: a repeated run computes none)
+    per_step = known[h] if h in known else known.setdefault(h, map_error(ss.A, ss.B, h))
     with np.errstate(all="ignore"):
         if x_bound is None or np.any(ss.Dx):  # (the drive's direct term changes x)
             # (no |x| temporary the size of x: 1e7 values for 100 nodes × 1e5 steps)
             x_bound = _peak(out.x)
-        return err + ROUNDING_PER_STEP * (out.time.size - 1) * x_bound
+        return err + per_step * (out.time.size - 1) * x_bound
 
 
 def _waveform(circuit: Circuit, drive, rpm) -> Waveform:
@@ -623,8 +627,7 @@ def _incidences(index: dict, els, n: int) -> np.ndarray:
 
 
 def _law_forces(spring, comp, e, w):
-    total = np.empty(e.size)
-    part = np.empty(e.size)
+    total, part = np.empty(e.size), np.empty(e.size)
     kernels().law_many(np.ascontiguousarray(e), np.ascontiguousarray(w),
                        *_law_params(spring, comp), total, part)
     return total, part
