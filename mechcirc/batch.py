@@ -922,8 +922,7 @@ def _extremes(ds: Designs, lo: float, hi: float, res: DesignResonances,
     if fast.size:
         if ends is None:
             ends = ds.sweep(np.array([lo, hi])).K
-        Ke = np.abs(ends[fast])
-        amp = np.abs(ds.amplitude[fast])
+        Ke, amp = np.abs(ends[fast]), np.abs(ds.amplitude[fast])
         with np.errstate(invalid="ignore"):
             in_band = (res.omega[fast] >= lo * (1 - 1e-12)) & \
                 (res.omega[fast] <= hi * (1 + 1e-9))

@@ -253,8 +253,7 @@ def _chunk_values(system, pencil3, pinv, S, V, stamps) -> list:
     per root."""
     ei, ej, y, laws, slopes, law_row, damper = stamps
     M, D, Ks = pencil3
-    top = np.argmax(np.abs(V), axis=0)
-    col = np.arange(S.size)
+    top, col = np.argmax(np.abs(V), axis=0), np.arange(S.size)
     V /= V[top, col]                        # 1 at the largest entry (real when undamped),
     V[top, col] = 1.0                       # exactly (a complex quotient may miss by an ulp)
     # Real vectors (undamped roots) keep every (element × root) array real: the complex

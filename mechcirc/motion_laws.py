@@ -267,8 +267,7 @@ class Motion:
         # (Bw/2)(e^{j(wτ+φ)} + e^{−j(wτ+φ)}), each ∫₀ᴸ e^{jατ} = L e^{jαL/2} sinc(αL/2).
         live = sine[:, 0] != 0.0
         B, w, phi = sine[live, 0:1], sine[live, 1:2], sine[live, 2:3]
-        L = length[live, None]
-        c = np.empty(k.size, dtype=complex)
+        L, c = length[live, None], np.empty(k.size, dtype=complex)
         step = max(1, _FOURIER_BLOCK // start.size)   # k in blocks: bounded scratch
         for k0 in range(0, k.size, step):
             kk = k[k0:k0 + step]
@@ -276,8 +275,7 @@ class Motion:
             half = np.sin(0.5 * np.outer(kk, length))
             turn = (-2 * half * half - 1j * np.sin(np.outer(kk, length))) * phase
             sums = turn @ ends[0] + phase @ (ends[0] - ends[1])             # (k, r)
-            z = -1j * kk
-            acc = np.zeros(kk.size, dtype=complex)
+            z, acc = -1j * kk, np.zeros(kk.size, dtype=complex)
             for r in range(_DEG - 2, -1, -1):                             # Σᵣ sumsᵣ / z^{r+1}
                 acc = (acc + sums[:, r]) / z
             for sgn in (1.0, -1.0):

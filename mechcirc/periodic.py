@@ -433,8 +433,7 @@ def _harmonics_round(circuit, motion, Omega, kmax, tol, harmonics, method, done_
     err = tail[np.arange(P), n - 1]
     errK = sw.error.reshape(Qk.shape)
     err = err + np.sum(np.where(used & np.isfinite(errK), errK, 0.0) * mag, axis=1)
-    interp = np.zeros(P)
-    coarse = getattr(motion, "coarse", None)
+    interp, coarse = np.zeros(P), getattr(motion, "coarse", None)
     if coarse is not None:
         dQ = np.abs(2 * Omega[:, None] * (c - coarse.fourier(kmax)) * Qu)
         interp = np.sum(np.where(used & np.isfinite(dQ), dQ, 0.0), axis=1)

@@ -615,8 +615,13 @@ def _damped_roots(scaled: tuple[np.ndarray, np.ndarray, np.ndarray], w_ref: floa
     """``(s, error, vectors)`` of the scaled damped pencil, rigid-body roots left out."""
     s_all, U = _damped(*scaled, vectors=vectors)
     s_all = s_all * w_ref
-    # Rigid-body (zero) roots come out of QZ split by about sqrt(eps)·w_ref.
-    keep = np.flatnonzero((np.abs(s_all) > 1e-6 * w_ref) & (s_all.imag >= -1e-12 * np.abs(s_all)))
+    # Rigid-body (zero) roots come out of QZ split by about sqrt(eps)·w_ref.  More roots
+    # that small than det has zeros: the largest of them are genuine slow roots (a motor's
+    # inertia creeping through a small damper, 7e-3 rad/s beside 9.2e10), kept where the
+    # estimate below leaves them a digit (1e2·eps·max|s|/|s| < 1).
+    mag = np.abs(s_all) / w_ref
+    live = ((mag > 1e-6) | _slow_roots(mag[None], _zero_roots(*scaled[1:]))[0])
+    keep = np.flatnonzero(live & (s_all.imag >= -1e-12 * np.abs(s_all)))
     s, U = s_all[keep], U[:, keep] if vectors else None
     mag = np.abs(s)
     err = _EPS * 1e2 * (mag.max(initial=1.0) / mag)
@@ -631,6 +636,30 @@ def _damped_roots(scaled: tuple[np.ndarray, np.ndarray, np.ndarray], w_ref: floa
         err = np.maximum(err, 10 * near)
     s = np.where(np.abs(s.imag) <= 1e-12 * np.abs(s), s.real + 0j, s)
     return s, err, U
+
+
+def _zero_roots(D, K) -> np.ndarray:
+    """How many roots of det(s²M + sD + K) are 0, per matrix of a stack: the directions K
+    does not hold, and again those D does not hold either (s² m = 0, a free mass); for
+    a passive network's semidefinite matrices nullity(K) + nullity(K + D).  Ranks to
+    1e-13 of each matrix's largest eigenvalue, as the massless directions' count."""
+    return sum(np.sum(np.abs(mu) <= 1e-13 * np.maximum(np.abs(mu).max(axis=-1, keepdims=True),
+                                                       1e-300), axis=-1)
+               for mu in (np.linalg.eigvalsh(K), np.linalg.eigvalsh(K + D)))
+
+
+def _slow_roots(mag: np.ndarray, zeros) -> np.ndarray:
+    """Which roots below the rigid-body cut (``mag`` = |s|/w_ref ≤ 1e-6, rows of a stack)
+    are genuine: in a row with more of them than ``zeros`` roots of det at 0, the
+    largest, where the estimate 1e2·eps·max|s|/|s| leaves them a digit (a motor's inertia
+    creeping through a small damper: 7e-3 rad/s beside 9.2e10)."""
+    out, tiny = np.zeros(mag.shape, dtype=bool), mag <= 1e-6
+    zeros = np.broadcast_to(zeros, mag.shape[:1])
+    for d in np.flatnonzero(tiny.sum(axis=-1) > zeros):
+        idx = np.flatnonzero(tiny[d])
+        idx = idx[np.argsort(mag[d, idx])[zeros[d]:]]
+        out[d, idx[mag[d, idx] > 1e2 * _EPS * mag[d][np.isfinite(mag[d])].max()]] = True
+    return out
 
 
 def _band_modes(M, D, K, omega_max: float) -> np.ndarray:
@@ -858,8 +887,7 @@ def _symmetric_eigvals(A: np.ndarray) -> np.ndarray:
         S = sp.csr_matrix(A)
         _, col, row, band = band_order(S.indptr, S.indices)
         if 8 * band <= n:
-            low = row >= col
-            ab = np.zeros((band + 1, n))
+            low, ab = row >= col, np.zeros((band + 1, n))
             ab[(row - col)[low], col[low]] = S.data[low]
             return eigvals_banded(ab, lower=True, check_finite=False)
     return np.linalg.eigvalsh(A)
@@ -1020,8 +1048,7 @@ def _spacing(s: np.ndarray, other: np.ndarray) -> np.ndarray:
     ``other`` sorted by |s|, its k-th entries on each side of a root's place are
     compared for k = 0, 1, … until every root's next ones differ from it in |s| by
     more than its nearest yet (| |a| − |b| | ≤ |a − b|): no table of all distances."""
-    best = np.full(s.size, np.inf)
-    order = np.argsort(np.abs(other), kind="stable")
+    best, order = np.full(s.size, np.inf), np.argsort(np.abs(other), kind="stable")
     z, m, ms = other[order], np.abs(other[order]), np.abs(s)
     pos = np.searchsorted(m, ms)
     for k in range(other.size):
@@ -1556,7 +1583,8 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
         sig[shifted], finite[shifted], ok[shifted] = _shifted_roots(
             Ms[shifted], Ds[shifted], Ks[shifted])
     mag = np.abs(sig)
-    live = (mag > 1e-6) & (sig.imag >= -1e-12 * mag) & finite & ok[:, None]
+    slow = _slow_roots(np.where(finite & ok[:, None], mag, np.inf), _zero_roots(Ds, Ks))
+    live = ((mag > 1e-6) | slow) & (sig.imag >= -1e-12 * mag) & finite & ok[:, None]
     # Coalescing roots (ζ → 1): _modes's estimate from the gaps.
     with np.errstate(all="ignore"):
         gap = np.abs(sig[:, :, None] - sig[:, None, :])

@@ -654,7 +654,10 @@ def test_nodal_designs_resonances_are_find_resonances(variant, monkeypatch):
                         lambda *a, f=batch._polish_nodal: polished.append(a[1].size) or f(*a))
     for omega_max in (None,) if variant == "damped" else (None, 300.0):
         res = ds.resonances(omega_max=omega_max)
-        assert res.single.size == 0 and not res.failed        # all stacked
+        # all stacked, but for the design (k5 = 1e6, c = 1e-3) whose drive released
+        # creeps: the slow root s = −4c/4.9 = −8.2e-4 rad/s, below 1e-6 of its scale,
+        # has κ = 2.5e12 in the stacked Newton and is polished one by one (2.5e-15)
+        assert list(res.single) == ([2] if variant == "damped" else []) and not res.failed
         # "undamped": a diagonal mass matrix, the eigenvalue bound stands and no root
         # is polished, here as in find_resonances: every number equal.  "polished":
         # every root polished by the same secant; ω equal (measured), but it starts

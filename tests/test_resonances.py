@@ -596,6 +596,31 @@ def test_resonance_at_1e_minus_181_rad_per_s_is_found():
     assert found[0].zeta == 1.0
 
 
+def test_a_slow_root_below_the_rigid_body_cut_is_kept():
+    """A motor's inertia J, a spring k to a crank held by a damper d (scene campaign, seed 1,
+    mechanism 40, reduced): with the drive released det = s (J d s² + J k s + k d), roots
+    0, −7.0457e-3 and −9.236e10 rad/s.  The slow root is 7.6e-14 of the scale, below the cut
+    (1e-6) that drops the rigid-body root 0 as QZ splits it, and was left out; det has
+    one zero root only, so the slow one is kept and polished.  Reference: the quadratic's
+    roots in mpmath (d = value·η)."""
+    import mpmath
+
+    with mpmath.workdps(40):
+        J, k = mpmath.mpf("2.6018458096484676e-05"), mpmath.mpf("16931.75375402133")
+        d = mpmath.mpf("0.04217744735497409") * mpmath.mpf("4.346357072989714e-06")
+    text = ("drive V motor 0 velocity=1.0\nmass J_motor motor 0 2.6018458096484676e-05\n"
+            "spring C_crank crank motor 16931.75375402133\n"
+            "damper warp crank 0 0.04217744735497409 eta=4.346357072989714e-06\n")
+    found = mechcirc.parse(text).resonances()
+    slow = [r for r in found if r.omega < 1.0]
+    assert [r.kind for r in slow] == ["antiresonance"] and slow[0].zeta == 1.0
+    with mpmath.workdps(40):        # the small root without cancellation: 2c / (b + √(b² − 4ac))
+        a, b, c = J * d, J * k, k * d
+        exact = float(2 * c / (b + mpmath.sqrt(b * b - 4 * a * c)))
+    assert abs(slow[0].omega - exact) <= slow[0].error * exact, (slow[0], exact)
+    assert slow[0].error < 1e-12
+
+
 def _mck(zeta: float, m=2.0, k=800.0):
     c = 2 * zeta * math.sqrt(k * m)
     return mechcirc.parse(f"drive V a 0 velocity=1\nmass m a 0 {m!r}\n"

@@ -201,8 +201,7 @@ def _geometry(motion, theta, follower, rb, rf, e, arm, pivot, x0):
         return s, ds, dds, None, p * m + pf * t, np.zeros_like(s), None, rho
     if follower == "roller":
         d = math.sqrt((rb + rf) ** 2 - e * e)
-        B = np.array([np.full_like(s, e), d + s])
-        dB = np.array([np.zeros_like(s), ds])
+        B, dB = np.array([np.full_like(s, e), d + s]), np.array([np.zeros_like(s), ds])
         ddB = np.array([np.zeros_like(s), dds])
         v = np.array([np.zeros_like(s), np.ones_like(s)])      # direction of the lift
     else:

@@ -1108,8 +1108,7 @@ class Newton:
         Ra, _, Rb, _ = sides if sides is not None else self._sides(q)
         pl = self.pl
         N = len(q)
-        w2 = _with_ground(qdot[:, 2::3] ** 2)
-        g = np.zeros((N, self.n))
+        w2, g = _with_ground(qdot[:, 2::3] ** 2), np.zeros((N, self.n))
         g[:, :2 * self.m] = np.ascontiguousarray(Ra * w2[:, pl.ia] - Rb * w2[:, pl.ib]).view(
             np.float64)
         if self.ns:

@@ -207,8 +207,7 @@ def _forced_rows(built, found, model, kern, theta, free, h) -> list:
     ws = sorted(r.omega for r in found)
     probe = [0.5 * ws[0], 0.9 * ws[0], *(math.sqrt(a * b) for a, b in zip(ws, ws[1:])),
              1.5 * ws[-1]]
-    sw = circuit.sweep(np.array(probe))
-    rows = []
+    sw, rows = circuit.sweep(np.array(probe)), []
     for w, q0 in zip(probe, sw.Q0):
         qt = _forced_amplitude(model, kern, theta, w, free, h, built.drive_ratio)
         v0 = abs(circuit.drive.amplitude)

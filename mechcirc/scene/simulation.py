@@ -328,8 +328,7 @@ def state_matrix(M, D, K):
     [[0, I], [−M⁻¹K, −M⁻¹D]] (the sley's :meth:`~mechcirc.sley.linear.LinearModel.state_matrix`
     too)."""
     n = M.shape[0]
-    inv = 1.0 / np.diag(M)[:, None]
-    A = np.zeros((2 * n, 2 * n))
+    inv, A = 1.0 / np.diag(M)[:, None], np.zeros((2 * n, 2 * n))
     A[:n, n:] = np.eye(n)
     A[n:, :n] = -inv * K
     A[n:, n:] = -inv * D

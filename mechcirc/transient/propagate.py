@@ -186,15 +186,13 @@ def propagate_blocks(A, B, z0, u, h, block: int | None = None) -> np.ndarray:
     # Forcing accumulated over a whole block: Σ_i h[L−1−i] w_i.
     Fend = ub @ H1[::-1] + dub @ H2[::-1]
     PL = np.linalg.matrix_power(Phi, L)
-    starts = np.empty((nb, N))
-    z = np.asarray(z0, float).copy()
+    starts, z = np.empty((nb, N)), np.asarray(z0, float).copy()
     for b in range(nb):
         starts[b] = z
         z = PL @ z + Fend[b]
     out = Z[1:]
     cur = starts
-    PhiT = np.ascontiguousarray(Phi.T)
-    G12 = np.vstack([G1, G2])
+    PhiT, G12 = np.ascontiguousarray(Phi.T), np.vstack([G1, G2])
     for j in range(L):
         cur = cur @ PhiT + np.column_stack([ub[:, j], dub[:, j]]) @ G12
         k = np.arange(nb) * L + j          # state index − 1 of step j+1 in block b

@@ -356,8 +356,7 @@ def with_oscillator(ss: StateSpace, z0, omega: float, amp: float):
         return out
 
     Cx = widen(ss.Cx, ss.Dx)
-    Cv = widen(ss.Cv, ss.Dv, ss.Ev)
-    zero = np.zeros(ss.Cx.shape[0])
+    Cv, zero = widen(ss.Cv, ss.Dv, ss.Ev), np.zeros(ss.Cx.shape[0])
     extra = None if ss.extra is None else np.vstack([ss.extra, np.zeros((2, ss.extra.shape[1]))])
     new = dataclasses.replace(ss, A=A, B=np.zeros(N + 2), Cx=Cx, Dx=zero, Cv=Cv, Dv=zero,
                               Ev=zero, extra=extra)
