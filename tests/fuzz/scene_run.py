@@ -558,12 +558,7 @@ def draw_mechanism(rng, kind):
                                 "u": [float(c) for c in u], "E": "B", "F": "C"})
             upstream_pts = block_pts
         else:
-            rod = ["B", "C"]
-            if rng.random() < 0.8:
-                E = B + (C - B) * D.u(-0.3, 1.3) + np.array([-(C - B)[1], (C - B)[0]]) * D.u(-0.6, 0.6)
-                D.pt("E", E * S)
-                rod.append("E")
-                D.moving_pts.append("E")
+            rod = _coupler(D, rng, B, C, S)
             D.links["rod"] = rod
             D.rigid_links += ["rod", "block"]
             crank_spec["dyad"] = {"kind": "RRP", "B": "B", "C": "C", "u": [float(c) for c in u],
@@ -600,12 +595,7 @@ def draw_mechanism(rng, kind):
                                 "E": "B", "F": "C"})
             upstream_pts = [p for p in rocker if p != "D"]
         else:
-            cpl = ["B", "C"]
-            if rng.random() < 0.8:
-                E = B + (C - B) * D.u(-0.3, 1.3) + np.array([-(C - B)[1], (C - B)[0]]) * D.u(-0.6, 0.6)
-                D.pt("E", E * S)
-                cpl.append("E")
-                D.moving_pts.append("E")
+            cpl = _coupler(D, rng, B, C, S)
             D.links["coupler"] = cpl
             D.rigid_links.append("coupler")
             crank_spec["dyad"] = {"kind": "RRR", "B": "B", "C": "C", "D": "D",
@@ -796,6 +786,17 @@ def describe(D):
             "links": dict(D.links), "sliders": list(D.sliders), "masses": list(D.masses),
             "elements": list(D.elements), "parts": parts, "kind": D.kind, "omega": 10.0,
             "drive": "crank", "torsions": []}
+
+
+def _coupler(D, rng, B, C, S) -> list:
+    """A rigid coupler B–C, in four cases of five with a point E off its line (moving)."""
+    pts = ["B", "C"]
+    if rng.random() < 0.8:
+        E = B + (C - B) * D.u(-0.3, 1.3) + np.array([-(C - B)[1], (C - B)[0]]) * D.u(-0.6, 0.6)
+        D.pt("E", E * S)
+        pts.append("E")
+        D.moving_pts.append("E")
+    return pts
 
 
 def make(rng, kind):
