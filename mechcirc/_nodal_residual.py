@@ -256,8 +256,7 @@ class Pattern:
         ax_re = dd_add(g_h.real, g_l.real, -sus_im[0], -sus_im[1])
         ax_im = dd_add(g_h.imag, g_l.imag, *sus_re)
         r_re = dd_add(rhs[None, :], 0.0, -ax_re[0], -ax_re[1])
-        r_im = (-ax_im[0], -ax_im[1])
-        out = np.empty((c, n), dtype=complex)
+        r_im, out = (-ax_im[0], -ax_im[1]), np.empty((c, n), dtype=complex)
         for part, (hi, lo) in ((out.real, r_re), (out.imag, r_im)):
             lo = np.where(np.isfinite(lo) | ~np.isfinite(hi), lo, 0.0)
             part[...] = hi + lo
@@ -269,8 +268,7 @@ class Pattern:
         c, n = xh.shape
         xh = np.asarray(xh, dtype=complex)
         xl = None if xl is None else np.asarray(xl, dtype=complex)
-        low = xh if xl is None else xl
-        out = np.empty((c, n), dtype=complex)
+        low, out = xh if xl is None else xl, np.empty((c, n), dtype=complex)
         kern.residual(np.ascontiguousarray(omega, dtype=float), xh.real, xh.imag, low.real,
                       low.imag, xl is not None, np.asarray(rhs, dtype=float), self.k_bi,
                       self.k_bj, self.k_bs, self.e_i, self.e_j,

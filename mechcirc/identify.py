@@ -60,8 +60,7 @@ def poles(record, dt: float, *, delays: int | None = None, order: int | None = N
     Y = np.asarray(record, float)
     Y = Y[:, None] if Y.ndim == 1 else Y
     n, p = Y.shape
-    Y = Y / np.maximum(np.std(Y, axis=0), 1e-300)
-    L = n // 3 if delays is None else delays
+    Y, L = Y / np.maximum(np.std(Y, axis=0), 1e-300), n // 3 if delays is None else delays
     H = np.lib.stride_tricks.sliding_window_view(Y, L + 1, axis=0)  # (n − L, p, L + 1)
     H = H.transpose(0, 2, 1).reshape(n - L, (L + 1) * p)           # row k: y_k … y_k+L
     R = np.linalg.qr(H, mode="r")          # same right singular vectors, cheaper SVD

@@ -467,8 +467,7 @@ def motion_table(angle_deg, displacement, spec: str = "motion=<table>", *, slope
         full table's error is about 16 times smaller).  Tables of fewer than 9
         rows get no estimate (``inf``).
     """
-    ang = np.asarray(angle_deg, dtype=float)
-    x = np.array(displacement, dtype=float)
+    ang, x = np.asarray(angle_deg, dtype=float), np.array(displacement, dtype=float)
     theta = np.radians(ang - ang[0])
     theta[-1] = _TAU
     x[-1] = x[0]

@@ -292,8 +292,7 @@ def _peaks(Qk: np.ndarray, fine: bool = True) -> tuple[np.ndarray, np.ndarray]:
     n = 1 << max(10 if fine else 6, math.ceil(math.log2(per * n_k + 1)))
     y = _on_grid(Qk, n)         # (n > 4 n_k: no finer grid needed)
     i = np.argmax(np.abs(y), axis=1)
-    best = np.abs(y[np.arange(rows), i])
-    theta = 2 * np.pi * i / n
+    best, theta = np.abs(y[np.arange(rows), i]), 2 * np.pi * i / n
     k = np.arange(1, n_k + 1)
     for r in range(rows if fine else 0):
         q, t = Qk[r], theta[r]

@@ -604,6 +604,32 @@ def test_crosscheck_of_a_network_without_independent_mode_shapes():
     assert all(row["verdict"] == "agrees" and row["tol"] <= 1e-8 for row in cc.steady_state)
 
 
+def test_crosscheck_does_not_match_a_mode_with_the_alias_of_a_faster_one():
+    """Crosscheck campaign, seed 2, network 49: anti-resonances at 0.015535 (next to a
+    resonance at 0.015543: it hardly rings at the drive) and 13.024 rad/s, undamped.
+    The slow one's record is sampled every π/(2.5·0.015535) = 80.9 s, where the fast one
+    rings at its alias, |((13.024·80.9 + π) mod 2π) − π| / 80.9 = 0.02498 rad/s; the
+    check matched the slow mode with it, "6.1e-01 off: DISAGREES".  K has no pole there
+    (the sweep at 0.02498 is finite and smooth), so the slow mode cannot be measured on
+    that record."""
+    net = mechcirc.parse(
+        "drive V n1 0 velocity=1\nmass e0 n1 0 0.11766276761355454\n"
+        "spring e1 n2 0 0.01803928357249917\nmass e2 n3 n1 1.236902847806824\n"
+        "spring e3 n4 0 124.01710739241156\nmass e4 n5 n3 0.9774074379192442\n"
+        "spring e5 n6 n1 3113.353041712637\nspring e6 n7 n6 0.02842780692712645\n"
+        "mass e7 n7 n4 117.65364071474413\nspring e8 n6 n3 9.373307020101037e-05\n"
+        "spring e9 n1 n4 23.759422259919553\n")
+    dt = math.pi / (2.5 * 0.01553486038)
+    alias = abs((13.02429916 * dt + math.pi) % (2 * math.pi) - math.pi) / dt
+    assert abs(alias - 0.0249836) < 1e-6
+    K = net.sweep(alias * np.array([0.999, 1.0, 1.001])).K
+    assert np.all(np.isfinite(K)) and np.ptp(np.abs(K)) < 1e-2 * np.abs(K).max()
+    cc = crosscheck(net)
+    assert cc.verdict["disagree"] == 0
+    slow = [r for r in cc.resonances if r["kind"] == "antiresonance" and r["omega"] < 1]
+    assert slow[0]["verdict"] == "cannot be measured" and "13.0243" in slow[0]["why"]
+
+
 def test_crosscheck_steady_tolerance_covers_the_time_domains_rounding():
     # massless damped drive node (output weights k/c ~ 4e5 on states ~1e-6): the steady
     # record departs from a sinusoid by 2.4e-9 through rounding alone (it was "disagrees"

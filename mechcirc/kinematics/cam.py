@@ -209,8 +209,7 @@ def _geometry(motion, theta, follower, rb, rf, e, arm, pivot, x0):
         psi = math.acos(cos0) + s
         v = np.array([np.sin(psi), np.cos(psi)])
         B = np.array([pivot - arm * v[1], arm * v[0]])
-        dB = arm * ds * v
-        ddB = arm * dds * v + arm * ds ** 2 * np.array([v[1], -v[0]])
+        dB, ddB = arm * ds * v, arm * dds * v + arm * ds ** 2 * np.array([v[1], -v[0]])
     T = np.array([dB[0] + B[1], dB[1] - B[0]])                  # B' − JB
     A = np.array([ddB[0] + 2 * dB[1] - B[0], ddB[1] - 2 * dB[0] - B[1]])   # B'' − 2JB' − B
     speed = np.hypot(T[0], T[1])

@@ -1142,8 +1142,7 @@ class Newton:
                         parts[i] = np.linalg.solve(J[i], rhs[i])
             qdot = parts.sum(axis=2)
             g = self.gamma(q, qdot, sides)
-            qddot = np.full_like(qdot, np.nan)
-            fine = np.all(np.isfinite(qdot), axis=1)
+            qddot, fine = np.full_like(qdot, np.nan), np.all(np.isfinite(qdot), axis=1)
             if np.any(fine):
                 qddot[fine] = np.linalg.solve(J[fine], g[fine][..., None])[..., 0]
         return J, qdot, qddot, parts

@@ -441,8 +441,7 @@ def _prepare(scene: Scene, shaft, flywheel, points, rigid):
     req = _RigidShaft(scene, Jf, motor)         # (refuses a shaft with no inertia)
     eq: _ElasticShaft = req
     if not rigid and scene.parts and len(scene.parts) > 1:
-        eq = _ElasticShaft(scene, Jf, motor)
-        th = np.array([0.0, 1.0, 2.0])
+        eq, th = _ElasticShaft(scene, Jf, motor), np.array([0.0, 1.0, 2.0])
         with np.errstate(divide="ignore", invalid="ignore"):     # θ̈ of no inertia: unused
             m0 = eq.evaluate(th, 0.0, [eq.rest(t) for t in th])[:, -3]
         if eq.Jf + eq.c ** 2 * float(m0.min()) <= 0:

@@ -295,8 +295,7 @@ def forced_amplitude(lin, omega: float, cycles_measure: int = 4) -> float:
     A[n:2 * n, 2 * n + 1] = np.linalg.solve(lin.M, lin.C_drive)      # φ̇2 = cos(ωt)
     A[2 * n, 2 * n + 1], A[2 * n + 1, 2 * n] = omega, -omega
     step = expm(A * (period / samples))
-    one_period = np.linalg.matrix_power(step, samples)
-    z = np.zeros(2 * n + 2)
+    one_period, z = np.linalg.matrix_power(step, samples), np.zeros(2 * n + 2)
     z[2 * n + 1] = 1.0                                  # u = (sin 0, cos 0)
     z[:2 * n] = np.linalg.solve(np.eye(2 * n) - one_period[:2 * n, :2 * n],
                                 one_period[:2 * n, 2 * n + 1])

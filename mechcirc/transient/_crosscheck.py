@@ -155,13 +155,21 @@ def _ringing(circuit, kind, modes, others, out, progress):
             continue
         third = y.size // 3
         s, parts = _poles(y, dt), (_poles(y[:2 * third], dt), _poles(y[third:], dt))
+        faster = [r for r in modes if r.omega_d > 0 and r.omega > top]
         for r in group:
-            _judge_mode(rows[id(r)], r, others, s, parts, dt)
+            _judge_mode(rows[id(r)], r, others, s, parts, dt, faster)
     out.resonances.extend(rows[id(r)] for r in modes)
 
 
-def _judge_mode(row: dict, r, others, s: np.ndarray, parts: tuple, dt: float) -> None:
-    """Judge mode ``r`` by the poles ``s`` of the whole record and ``parts`` of its thirds."""
+def _judge_mode(row: dict, r, others, s: np.ndarray, parts: tuple, dt: float,
+                faster=()) -> None:
+    """Judge mode ``r`` by the poles ``s`` of the whole record and ``parts`` of its thirds.
+
+    The record of a slow group is sampled every ``dt`` = π/(2.5 ω_top) and a ``faster``
+    mode of the same kind rings in it too, at its alias: where the pole nearest ``r`` is
+    such an alias (5 of 6 gross mismatches on 600 random networks, e.g. 13.024 rad/s
+    sampled every 80.9 s rings at 0.02498, matched to a weak mode at 0.01553), ``r``
+    cannot be measured on this record."""
     expected = pole_of(r)
     near = min((abs(pole_of(o) - expected) for o in others), default=math.inf)
     if near < CANCEL * abs(expected):
@@ -175,6 +183,12 @@ def _judge_mode(row: dict, r, others, s: np.ndarray, parts: tuple, dt: float) ->
         row.update(verdict=DISAGREES, tol=tol, why="no ringing at all in the impulse response")
         return
     best = nearest_pole(s, expected, dt)
+    for f in faster:
+        alias = complex(np.log(np.exp(pole_of(f) * dt)) / dt)
+        if abs(best - complex(alias.real, abs(alias.imag))) <= 1e-6 * abs(alias):
+            judge(row, None, tol, f"the record's pole nearest it is the alias of the mode at "
+                                  f"{f.omega_d:.6g} rad/s (sampled every {dt:.3g} s)")
+            return
     spread = max((abs(nearest_pole(p, expected, dt) - best) if p.size else math.inf)
                  for p in parts) / abs(expected)
     why = None if spread <= MAX_SPREAD else (

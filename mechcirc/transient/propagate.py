@@ -175,8 +175,7 @@ def propagate_blocks(A, B, z0, u, h, block: int | None = None) -> np.ndarray:
     up = np.empty(nb * L + 1)
     up[:nt] = u
     up[nt:] = u[-1]
-    ub = up[:-1].reshape(nb, L)
-    dub = np.diff(up).reshape(nb, L)
+    ub, dub = up[:-1].reshape(nb, L), np.diff(up).reshape(nb, L)
     # Input responses h_m = Φᵐ Γ for m < L (matrix-vector products).
     H1, H2 = np.empty((L, N)), np.empty((L, N))
     H1[0], H2[0] = G1, G2
@@ -253,8 +252,7 @@ def propagate_modal(A, B, z0, u, h, Cx=None, w=None, x_only=False, cache=None):
     (m, Vinv_k, rot, mu, g1, g2, cre, cim, nx, T, note, late) = plan
     q0 = (Vinv_k @ np.asarray(z0, complex)) / rot
     keep_cols = nx if (x_only and Cx is not None) else N
-    Q = np.empty((nt, keep_cols))
-    qmax = np.zeros(m)
+    Q, qmax = np.empty((nt, keep_cols)), np.zeros(m)
     wout = np.zeros(N) if w is None else np.asarray(w, dtype=float) @ T
     y = np.empty(nt)
     _modal_states(mu, g1, g2, q0, np.ascontiguousarray(u, float), cre, cim, Q, qmax, wout, y)
