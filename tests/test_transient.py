@@ -630,6 +630,23 @@ def test_crosscheck_does_not_match_a_mode_with_the_alias_of_a_faster_one():
     assert slow[0]["verdict"] == "cannot be measured" and "13.0243" in slow[0]["why"]
 
 
+def test_a_faster_mode_that_has_decayed_within_a_sample_has_no_alias():
+    """exp(s·dt) of a mode that decays within one sample underflows to 0 and its "alias"
+    log(0)/dt is infinite, whose distance from any pole (∞) is "within" 1e-6 of it (∞):
+    found re-reading the alias rule, where a mode at 1 rad/s was said not measurable
+    beside one at 1e6 rad/s, ζ = 1, sampled every 1 s."""
+    from types import SimpleNamespace
+
+    from mechcirc.transient._crosscheck import _judge_mode
+
+    fast = SimpleNamespace(zeta=1.0, omega=1e6, omega_d=1e3)
+    slow = SimpleNamespace(zeta=0.01, omega=1.0, omega_d=1.0, error=1e-15)
+    found = np.array([complex(-0.01, 1.0)])
+    row: dict = {}
+    _judge_mode(row, slow, [], found, (found, found), 1.0, [fast])
+    assert row["verdict"] == "agrees" and row["rel_error"] == 0.0
+
+
 def test_crosscheck_steady_tolerance_covers_the_time_domains_rounding():
     # massless damped drive node (output weights k/c ~ 4e5 on states ~1e-6): the steady
     # record departs from a sinusoid by 2.4e-9 through rounding alone (it was "disagrees"

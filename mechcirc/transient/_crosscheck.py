@@ -31,6 +31,7 @@ are taken closed (the frequency domain's reading), and said so.
 
 from __future__ import annotations
 
+import cmath
 import dataclasses
 import math
 import warnings
@@ -184,8 +185,10 @@ def _judge_mode(row: dict, r, others, s: np.ndarray, parts: tuple, dt: float,
         return
     best = nearest_pole(s, expected, dt)
     for f in faster:
-        alias = complex(np.log(np.exp(pole_of(f) * dt)) / dt)
-        if abs(best - complex(alias.real, abs(alias.imag))) <= 1e-6 * abs(alias):
+        with np.errstate(all="ignore"):     # (a mode decayed within dt: exp 0, no alias)
+            alias = complex(np.log(np.exp(pole_of(f) * dt)) / dt)
+        if cmath.isfinite(alias) and \
+                abs(best - complex(alias.real, abs(alias.imag))) <= 1e-6 * abs(alias):
             judge(row, None, tol, f"the record's pole nearest it is the alias of the mode at "
                                   f"{f.omega_d:.6g} rad/s (sampled every {dt:.3g} s)")
             return

@@ -50,12 +50,12 @@ def map_error(A: np.ndarray, B: np.ndarray, h: float) -> float:
 
     ``expm`` scales A·h by 2⁻ˢ and squares s times, and every squaring doubles the error
     of every part of the result: beside a stiff mode (‖A h‖ large) the slow modes a run
-    carries from step to step are off by much more than the unit roundoff (5e-8 of
-    the map where ‖A h‖₁ = 9e8, against a 40-digit exponential).  Where ‖A h‖₁ >
-    :data:`MAP_CHECK_NORM` the map is computed again as the third and the fifth power of
-    the map of h/3 and h/5 (other scalings, other roundings): three times their larger
-    difference from it.  On seven stiff cases against mpmath that was 1.2 … 33 × the
-    true error of the map.
+    carries from step to step are off by much more than the unit roundoff (9e-9 of the
+    map's largest entry where ‖A h‖₁ = 9e8, against a 40-digit exponential).  Where
+    ‖A h‖₁ > :data:`MAP_CHECK_NORM` the map is computed again as the third and the fifth
+    power of the map of h/3 and h/5 (other scalings, other roundings): three times their
+    larger difference from it.  On seven stiff cases against mpmath that was 1.2 … 33 ×
+    the true error of the map.
     """
     if not np.abs(A * h).sum(axis=0).max(initial=0.0) > MAP_CHECK_NORM:
         return ROUNDING_PER_STEP
