@@ -165,8 +165,7 @@ class NodalSystem(Memos):
     def difference(self, x: NDArray, a: int | None = None, b: int | None = None) -> NDArray:
         """Velocity difference v_a − v_b from solutions ``x`` of shape (..., n): of the
         drive's nodes, or of the rows ``a`` and ``b`` given (−1: the reference)."""
-        a = self.a if a is None else a
-        b = self.b if b is None else b
+        a, b = self.a if a is None else a, self.b if b is None else b
         out = np.zeros(x.shape[:-1], dtype=x.dtype)
         if a >= 0:
             out = out + x[..., a]

@@ -609,8 +609,7 @@ class SparseSolver:
         n, kl = self.pat.n, self.kl
         ab = np.zeros((data.shape[0], n, self.band_rows), dtype=complex)
         ab[:, self.dest[0], self.dest[1]] = data
-        p = self.p
-        factors = []
+        p, factors = self.p, []
         for k in np.flatnonzero(good):
             lu, piv, info = zgbtrf(ab[k].T, kl, kl, overwrite_ab=1)
             if info != 0:
@@ -633,8 +632,7 @@ class SparseSolver:
         import scipy.sparse as sp
         from scipy.sparse.linalg import splu
 
-        n = self.pat.n
-        factors = []
+        n, factors = self.pat.n, []
         for k in np.flatnonzero(good):
             A = sp.csc_matrix((data[k, self.take], self.indices_p, self.indptr_p),
                               shape=(n, n))

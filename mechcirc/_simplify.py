@@ -262,8 +262,7 @@ def _merge_series(elements, fixed, protect, steps, taken):
     for e in elements:
         for n in (e.n1, e.n2):
             incident.setdefault(n, []).append(e)
-    series = []
-    used = set()
+    series, used = [], set()
     for node, es in incident.items():
         if node in fixed or len(es) != 2:
             continue

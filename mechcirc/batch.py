@@ -396,8 +396,7 @@ class Designs(Memos):
         with warnings.catch_warnings(action="ignore"):
             alone, failed = _alone(self, single, lambda d, c: find_resonances(c, omega_max))
         R = max([w.shape[1] if w.ndim == 2 else 0] + [len(v) for v in alone.values()])
-        live = np.isfinite(w)
-        kind = np.full((D, R), "", dtype="<U13")
+        live, kind = np.isfinite(w), np.full((D, R), "", dtype="<U13")
         out, count = np.full((4, D, R), np.nan), np.zeros(D, dtype=np.int64)
         if which.size:
             r = w.shape[1]

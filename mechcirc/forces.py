@@ -106,8 +106,7 @@ def element_forces(circuit: Circuit, omega: float, *, method: Method = "auto"
         raise InputError(f"omega must be a finite number > 0 rad/s, got {omega!r}")
     omega = float(omega)
     result = circuit.sweep(np.array([omega]), method=method)
-    Q0 = complex(result.Q0[0])
-    rows = []
+    Q0, rows = complex(result.Q0[0]), []
     for e in circuit.elements:
         try:
             Q, v = complex(result.force(e.name)[0]), complex(result.velocity(e.name)[0])

@@ -45,8 +45,7 @@ def reachable(adj: dict[str, set[str]], start: str, blocked: str | None = None) 
     -------
     set of str
     """
-    seen = {start}
-    queue = deque([start])
+    seen, queue = {start}, deque([start])
     while queue:
         u = queue.popleft()
         for w in adj.get(u, ()):
@@ -141,8 +140,7 @@ def loaded_groups(groups: Sequence[Sequence[tuple[str, str]]], a: str, b: str,
 def _block_with(adj: dict[str, set[str]], a: str, b: str) -> set[str]:
     """The nodes of the biconnected block of the simple graph ``adj`` that holds the
     edge a–b (Tarjan's lowpoints, iterative; self-loops belong to no block)."""
-    disc = {a: 0}
-    low = {a: 0}
+    disc, low = {a: 0}, {a: 0}
     edges: list[tuple[str, str]] = []
     stack: list[tuple[str, str | None, Iterator[str]]] = [(a, None, iter(adj[a]))]
     seen, push = disc.get, edges.append

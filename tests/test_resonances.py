@@ -621,6 +621,46 @@ def test_a_slow_root_below_the_rigid_body_cut_is_kept():
     assert slow[0].error < 1e-12
 
 
+#: Scene campaign seed 2, mechanism 143 (a four-bar with an output dyad) at θ = −112.18°,
+#: as `scene.build` writes it: a warp damper on the last output through η = 6.8e-11.
+SLOW_CREEP = """drive V motor 0 velocity=1.0
+mass m_B crank 0 0.23012334540230217 eta=0.00012436296571365977
+mass J_crank crank 0 0.00024598446788818234
+mass J_motor motor 0 0.0005119384816097937
+mass J_out1 out1 0 1.8410544135336322e-05 eta=0.0005367190621947318
+spring k_coupler crank rocker 178254.14103802555 eta=3.512733776633991e-05
+spring k_CF1 rocker out1 27776411.193472363 eta=1.923320469383233e-06
+spring k_F1F2 out1 out2 111512.15765362966 eta=1.5021948893046204e-10
+damper k_F1F2_d out1 out2 7.834187255781221 eta=1.5021948893046204e-10
+spring C_crank crank motor 798749.3750470083
+damper C_crank_d crank motor 268.7893700544868
+damper warp out2 0 10.123278547980494 eta=6.767691673020338e-11
+"""
+
+
+def test_a_slow_root_the_secant_cannot_reach_is_bracketed_on_the_real_axis():
+    """The eigen-solver put the slow anti-resonance at 1.79e-4 rad/s, 200 times its value
+    8.71e-7; the secant's step there is a move of 99.5 %, which it takes for leaving to
+    another root, so the root kept its eigen-solver value with an error of 9.95 (no
+    digit).  g = 1/K is real on the real axis: its sign change brackets the root, and
+    the secant confirms it.  Reference: the zero of det A(s) in mpmath (40 digits),
+    the element values × η, from s = −1e-6 (where a sweep of |K| turns)."""
+    import mpmath
+
+    from reference import mp_nodal
+
+    spec = {"elements": [], "levers": [], "drive": ("motor", "0")}
+    for line in SLOW_CREEP.splitlines()[1:]:
+        w = line.split()
+        eta = mpmath.mpf(w[5].split("=")[1]) if len(w) > 5 else 1
+        with mpmath.workdps(40):
+            spec["elements"].append((w[0], w[2], w[3], mpmath.mpf(w[4]) * eta))
+    exact = -mp_nodal.det_root(spec, -1e-6, True).real
+    slow = [r for r in mechcirc.parse(SLOW_CREEP).resonances() if r.omega < 1]
+    assert [r.kind for r in slow] == ["antiresonance"] and abs(exact - 8.71e-7) < 1e-9
+    assert abs(slow[0].omega - exact) <= slow[0].error * exact and slow[0].error < 1e-12
+
+
 def _mck(zeta: float, m=2.0, k=800.0):
     c = 2 * zeta * math.sqrt(k * m)
     return mechcirc.parse(f"drive V a 0 velocity=1\nmass m a 0 {m!r}\n"

@@ -601,8 +601,7 @@ class FourBar:
         jumps = self._mu_jumps(gap)
         for tc in jumps:
             th = th[np.abs(_wrap(th - tc)) >= gap]
-        nu = self.evaluate(th).nu
-        out = []
+        nu, out = self.evaluate(th).nu, []
         for sign, idx in ((1.0, int(np.argmin(nu))), (-1.0, int(np.argmax(nu)))):
             kinks = [tc for tc, jump in jumps.items() if sign * jump < 0]
             if kinks:                                 # a kink of this sign: unbounded

@@ -240,8 +240,7 @@ class LinkageMotion:
         rows = _StateRows(self)
         q, qd, qdd = self.q.copy(), self.qdot.copy(), self.qddot.copy()
         th, t = self.theta.tolist(), self.t.tolist()
-        out = []
-        new = object.__new__
+        out, new = [], object.__new__
         for i in range(len(th)):
             # filled as unpickling does: the frozen dataclass's __init__ (one
             # object.__setattr__ per field) costs more than the rest of a state
@@ -821,8 +820,7 @@ class _DyadSolver:
         N = len(t)
         E = np.ones((pl.nb + 1, N), dtype=complex)          # e^{iφ}; the ground last
         phi, r = np.zeros((pl.nb + 1, N)), np.zeros((pl.nb + 1, N), dtype=complex)
-        inner = []
-        margin = np.full(N, np.inf)
+        inner, margin = [], np.full(N, np.inf)
         for j, (c, ci) in enumerate(zip(lk.cranks, pl.crank_idx)):
             phi[ci] = pl.omega[j] * t
             E[ci] = np.exp(1j * phi[ci])

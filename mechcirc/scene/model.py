@@ -247,8 +247,7 @@ def element_ratios(scene: Scene, m: _Motion, r0) -> dict:
     along its line; each per unit drive velocity ``r0``.  Masses at ground
     points are not listed.  NaN for a load whose point meets its anchor.
     """
-    lk = scene.linkage
-    out = {}
+    lk, out = scene.linkage, {}
     with np.errstate(invalid="ignore", divide="ignore"):
         for ms in scene.masses:
             if ms.kind != "mass":
@@ -367,8 +366,7 @@ class _Builder:
     def _elastic(self) -> list:
         """(element, node a, node b, ratio c, size, what) of every spring, rod and load."""
         scene, m = self.scene, self.m
-        lk = scene.linkage
-        out = []
+        lk, out = scene.linkage, []
         for e in scene.elastic:
             a, b = lk.links[e.link]
             out.append((e, self.node_of_point(a), self.node_of_point(b),

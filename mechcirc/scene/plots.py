@@ -150,8 +150,7 @@ def _mode_displacements(scene, theta: float, n: int, kind: str):
         raise MechcircError(f"{scene.source}: {kind} {n} has no shape: {mode.note}")
     lk = scene.linkage
     state = lk.solve(float(theta))
-    nodes = list(model.parts)
-    raw = {}
+    nodes, raw = list(model.parts), {}
     for p in state.points:
         part = scene.part_of_point(p)
         xi = 0.0 if part is None else mode.shape.get(nodes[part], 0.0).real

@@ -161,8 +161,7 @@ def output_units(scene: Scene, names) -> dict[str, str]:
     dict of str to str
     """
     aliases = dict(getattr(scene.simulate, "aliases", None) or {})
-    torsions = {t.name for t in scene.torsions}
-    out = {}
+    torsions, out = {t.name for t in scene.torsions}, {}
     for name in names:
         owner, _, what = aliases.get(name, name).rpartition(".")
         if what == "moment":

@@ -381,8 +381,7 @@ def crosscheck_sley(params: SleyParameters, theta0: float, *, on_step=None):
         The damped netlist whose resonances were compared in (a).
     """
     step = on_step or (lambda: None)
-    checks = {}
-    res_rows = []
+    checks, res_rows = {}, []
     for d in (False, True):
         c = checks[d] = resonance_check(params, theta0, damping=d)
         step()

@@ -98,8 +98,7 @@ def separations(time, e, w, stiffness, damping, gap, name, omega_shaft=None):
     up = up + np.minimum(up, fd)                  # > 0: contact on the upper flank
     lo = stiffness * (e + half)
     lo = lo + np.maximum(lo, fd)                  # < 0: contact on the lower flank
-    closed = (up > 0) | (lo < 0)
-    out = []
+    closed, out = (up > 0) | (lo < 0), []
     n = time.size
     # openings: closed at k-1, open at k; each closes at the first closed sample after it
     opens = np.flatnonzero(closed[:-1] & ~closed[1:]) + 1

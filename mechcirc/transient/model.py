@@ -87,8 +87,7 @@ def backlash_elements(circuit: Circuit) -> list[tuple[Element, Element | None]]:
     -------
     list of (Element, Element or None)
     """
-    by_name = {e.name: e for e in circuit.elements}
-    out = []
+    by_name, out = {e.name: e for e in circuit.elements}, []
     for e in circuit.elements:
         if e.kind == "spring" and e.backlash >= 1e-10:
             comp = by_name.get(f"{e.name}_damping")
