@@ -620,7 +620,7 @@ def _damped_roots(scaled: tuple[np.ndarray, np.ndarray, np.ndarray], w_ref: floa
     # inertia creeping through a small damper, 7e-3 rad/s beside 9.2e10), kept where the
     # estimate below leaves them a digit (1e2·eps·max|s|/|s| < 1).
     mag = np.abs(s_all) / w_ref
-    live = ((mag > 1e-6) | _slow_roots(mag[None], _zero_roots(*scaled[1:]))[0])
+    live = ((mag > 1e-6) | _slow_roots(mag[None], scaled[1][None], scaled[2][None])[0])
     keep = np.flatnonzero(live & (s_all.imag >= -1e-12 * np.abs(s_all)))
     s, U = s_all[keep], U[:, keep] if vectors else None
     mag = np.abs(s)
@@ -648,13 +648,15 @@ def _zero_roots(D, K) -> np.ndarray:
                for mu in (np.linalg.eigvalsh(K), np.linalg.eigvalsh(K + D)))
 
 
-def _slow_roots(mag: np.ndarray, zeros) -> np.ndarray:
-    """Which roots below the rigid-body cut (``mag`` = |s|/w_ref ≤ 1e-6, rows of a stack)
-    are genuine: in a row with more of them than ``zeros`` roots of det at 0, the
-    largest, where the estimate 1e2·eps·max|s|/|s| leaves them a digit (a motor's inertia
-    creeping through a small damper: 7e-3 rad/s beside 9.2e10)."""
+def _slow_roots(mag: np.ndarray, D: np.ndarray, K: np.ndarray) -> np.ndarray:
+    """Which roots below the rigid-body cut (``mag`` = |s|/w_ref ≤ 1e-6, rows of a stack
+    of scaled D and K) are genuine: in a row with more of them than det has zero roots
+    (:func:`_zero_roots`, counted for those rows only), the largest, where the estimate
+    1e2·eps·max|s|/|s| leaves them a digit (a motor's inertia creeping through a small
+    damper: 7e-3 rad/s beside 9.2e10)."""
     out, tiny = np.zeros(mag.shape, dtype=bool), mag <= 1e-6
-    zeros = np.broadcast_to(zeros, mag.shape[:1])
+    zeros, some = np.zeros(mag.shape[0], dtype=np.int64), tiny.any(axis=-1)
+    zeros[some] = _zero_roots(D[some], K[some]) if some.any() else 0
     for d in np.flatnonzero(tiny.sum(axis=-1) > zeros):
         idx = np.flatnonzero(tiny[d])
         idx = idx[np.argsort(mag[d, idx])[zeros[d]:]]
@@ -1609,7 +1611,7 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
         sig[shifted], finite[shifted], ok[shifted] = _shifted_roots(
             Ms[shifted], Ds[shifted], Ks[shifted])
     mag = np.abs(sig)
-    slow = _slow_roots(np.where(finite & ok[:, None], mag, np.inf), _zero_roots(Ds, Ks))
+    slow = _slow_roots(np.where(finite & ok[:, None], mag, np.inf), Ds, Ks)
     live = ((mag > 1e-6) | slow) & (sig.imag >= -1e-12 * mag) & finite & ok[:, None]
     # Coalescing roots (ζ → 1): _modes's estimate from the gaps.
     with np.errstate(all="ignore"):
