@@ -502,22 +502,9 @@ def transient(seed: int, count: int) -> int:
     return bad
 
 
-def _law(e, w, c, d, b):
-    """The ElastoBacklash force (docs/transient.md, from the Modelica documentation)."""
-    if not b:
-        return c * e + d * w
-    h = b / 2
-    if abs(e) <= h:
-        return 0.0
-    s = 1 if e > h else -1
-    fc, fd = c * (e - s * h), d * w
-    if s > 0:
-        return 0.0 if fc + fd <= 0 else fc + min(fc, fd)
-    return 0.0 if fc + fd >= 0 else fc + max(fc, fd)
-
-
 def _plain_reference(m, springs, y0, t, rtol=1e-13):
     """x on ``t`` of DOP853 at ``rtol`` on the whole law, stepping over its kinks."""
+    from reference.transient_corpus import _law
     from scipy.integrate import solve_ivp
 
     n, m = len(m), np.asarray(m, float)
@@ -527,7 +514,7 @@ def _plain_reference(m, springs, y0, t, rtol=1e-13):
         for i, j, c, d, b in springs:
             xi, vi = (y[i], y[n + i]) if i >= 0 else (0.0, 0.0)
             xj, vj = (y[j], y[n + j]) if j >= 0 else (0.0, 0.0)
-            f = _law(xi - xj, vi - vj, c, d, b)
+            f = _law(xi - xj, vi - vj, c, b, d)
             if i >= 0:
                 a[i] -= f
             if j >= 0:
