@@ -30,8 +30,9 @@ import numpy as np
 import scipy.linalg as la
 
 from .._memo import Memos
-from ..circuit import Circuit, Element
+from ..circuit import FRAME, Circuit, Element
 from ..errors import MechcircError, TopologyError
+from ..topology import adjacency, force_groups, reachable
 
 __all__ = ["StateSpace", "state_space", "backlash_elements", "MAX_NODES"]
 
@@ -46,7 +47,13 @@ class StateSpace(Memos):
 
     ``kind`` is the drive's kind (``"velocity"``, ``"force"`` or ``None``); ``g``
     the drive's incidence (e_a − e_b), ``h`` the row giving the drive's force
-    from the nodal residual M a + D v + Kₛ x.  ``massive`` is true when every
+    from the nodal residual r = M a + D v + Kₛ x = Gᵀ μ + g Q: any h with
+    [G; g] h = e_last gives Q = h·r.  A velocity drive takes h = p, its generalised
+    force, in which a part moving rigidly with the drive adds exactly nothing (with
+    the minimum-norm h, a 105 kg inerter's rounding inside a floating part was 3e-9
+    of the force of the 0.05 kg mass driven); a force drive the minimum-norm h, solved
+    as such (scipy's ``pinv([Gᵀ g])`` was 6.8e-8 off it behind levers of ratios 185
+    and 919).  ``massive`` is true when every
     coordinate carries mass (required with clearances).  ``z0`` maps the
     circuit's initial conditions into the state.
     """
@@ -74,6 +81,22 @@ class StateSpace(Memos):
     @property
     def size(self) -> int:
         return self.A.shape[0]
+
+    def drive_rows(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(Mᵀh, Dᵀh, Kₛᵀh), the drive's force Q = h·(M a + D v + Kₛ x) as rows on a, v, x.
+
+        Summed element by element, m (g_eᵀh) g_e: an element inside a part that h
+        moves rigidly adds exactly 0 (from the summed matrices, the rounding of a
+        105 kg inerter's diagonal entry was 4e-9 of a 0.05 kg mass's force).
+        """
+        def rows():
+            index, n = {nd: i for i, nd in enumerate(self.nodes)}, len(self.nodes)
+            out = {kind: np.zeros(n) for kind in ("mass", "damper", "spring")}
+            for e in self.elements:
+                ge = incidence(index, e.n1, e.n2, n)
+                out[e.kind] += (e.value * e.eta * (ge @ self.h)) * ge
+            return out["mass"], out["damper"], out["spring"]
+        return self.memo("_drive_rows", rows)
 
 
 def backlash_elements(circuit: Circuit) -> list[tuple[Element, Element | None]]:
@@ -139,8 +162,9 @@ def state_space(circuit: Circuit, *, linearise: bool = False) -> StateSpace:
     Cons = np.vstack([G, g[None, :]]) if vel else G
     T = np.eye(n) if Cons.shape[0] == 0 else la.null_space(Cons, rcond=1e-12)
     nq = T.shape[1]
-    p = _particular(M, Cons, d.name) if vel and d is not None else np.zeros(n)
     Mq, Dq, Kq = (T.T @ X @ T for X in (M, D, K))
+    B1, B0 = _split(Mq, np.eye(nq))
+    p = _particular(work, index, M, Cons, T @ B1) if vel and d is not None else np.zeros(n)
     # Generalised force per unit drive value u and per unit drive displacement X.
     if kind == "force":
         Fu, Fx = T.T @ g, np.zeros(nq)
@@ -148,7 +172,6 @@ def state_space(circuit: Circuit, *, linearise: bool = False) -> StateSpace:
         Fu, Fx = -(T.T @ D @ p), -(T.T @ K @ p)
     else:
         Fu, Fx = np.zeros(nq), np.zeros(nq)
-    B1, B0 = _split(Mq, np.eye(nq))
     Bd, Bs = _split(Dq, B0)
     n1, n0, ns = B1.shape[1], Bd.shape[1], Bs.shape[1]
     Y = np.hstack([B1, Bd])
@@ -156,8 +179,8 @@ def state_space(circuit: Circuit, *, linearise: bool = False) -> StateSpace:
     A, Bv, M11_inv = _dynamics(Y.T @ Mq @ Y, Y.T @ Dq @ Y, Ky, Fyu, Fyx, n1, n0, vel)
     N = A.shape[0]
     Cx, Dx, Cv, Dv = _outputs(T, B1, Bd, Bs, (S_y, S_u, S_x), p, A, Bv, vel)
-    # Q from the residual r = M a + D v + K x = Gᵀ μ + g Q (consistent, exact).
-    h = la.pinv(np.hstack([G.T, g[:, None]]))[-1] if kind is not None else None
+    # Q = h·r, r = M a + D v + K x = Gᵀ μ + g Q, for any h with [G; g] h = e_last (StateSpace)
+    h = p if vel else _min_norm(np.vstack([G, g[None, :]])) if kind is not None else None
     massive = n0 == 0 and ns == 0
     extra = _clearance_map(clear, index, N, M11_inv, Y[:, :n1], T, massive) if clear else None
     z0, notes = _initial(circuit, nodes, index, Cx, Cv, N, vel)
@@ -231,17 +254,50 @@ def incidence(index: dict, n1: str, n2: str, n: int) -> np.ndarray:
     return g
 
 
-def _particular(M: np.ndarray, Cons: np.ndarray, name: str) -> np.ndarray:
-    """Minimum-kinetic-energy p with Cons p = e_last: [M Cᵀ; C 0][p; μ] = [0; e]."""
-    n, nc = M.shape[0], Cons.shape[0]
-    KKT = np.block([[M, Cons.T], [Cons, np.zeros((nc, nc))]])
-    rhs = np.zeros(n + nc)
-    rhs[-1] = 1.0
-    p = la.lstsq(KKT, rhs)[0][:n]
-    if np.abs(Cons @ p - rhs[n:]).max() > 1e-8 * max(1.0, np.abs(p).max()):
-        raise TopologyError(f"the velocity drive {name!r} contradicts the levers "
+def _particular(work: Circuit, index: dict, M: np.ndarray, Cons: np.ndarray,
+                TB1: np.ndarray) -> np.ndarray:
+    """Minimum-kinetic-energy p with Cons p = e_last (Tᵀ M p = 0), ``TB1`` the massive
+    directions of the free motion (T B1).
+
+    p is unique only on the coordinates with mass.  Where a part of the network
+    is held by the drive's node alone (reached from it without passing the
+    drive's other node or the frame), that part moves rigidly with the drive:
+    p = ±1 on it, exact, when that satisfies the constraints and Tᵀ M p = 0
+    (else the springs of a floating part see X(t) through static condensation,
+    whose rounding put 1.5e-4 of error on the drive's force where X reached
+    359 m: crosscheck campaign, seed 2, network 28).  Otherwise p is the
+    minimum-norm solution p₀ of the constraints with its massive part removed,
+    p = p₀ − T B1 (B1ᵀ Mq B1)⁻¹ (T B1)ᵀ M p₀: two solves, not
+    one saddle-point system ([M Cᵀ; C 0], whose least-squares solution was
+    7e-8 off behind levers of ratios 185 and 919 and moved a free mass).
+    """
+    nc = Cons.shape[0]
+    e = np.zeros(nc)
+    e[-1] = 1.0
+    d = work.require_drive()
+    adj = adjacency(pair for group in force_groups(work.elements, work.levers) for pair in group)
+    for a, b, sign in ((d.n1, d.n2, 1.0), (d.n2, d.n1, -1.0)):
+        part = reachable(adj, a, blocked=b) if a in index else {FRAME}
+        if FRAME not in part:
+            p = np.zeros(M.shape[0])
+            p[[index[nd] for nd in part if nd in index]] = sign
+            scale = max(np.abs(M).max(), 1e-300)
+            if np.array_equal(Cons @ p, e) and np.abs(TB1.T @ (M @ p)).max() <= 1e-12 * scale:
+                return p
+    p = _min_norm(Cons)
+    if TB1.shape[1]:
+        p -= TB1 @ la.solve(TB1.T @ M @ TB1, TB1.T @ (M @ p), assume_a="pos")
+    if np.abs(Cons @ p - e).max() > 1e-8 * max(1.0, np.abs(p).max()):
+        raise TopologyError(f"the velocity drive {d.name!r} contradicts the levers "
                             "(its nodes' relative motion is fixed by them)")
     return p
+
+
+def _min_norm(C: np.ndarray) -> np.ndarray:
+    """The minimum-norm solution of C h = e_last."""
+    e = np.zeros(C.shape[0])
+    e[-1] = 1.0
+    return la.lstsq(C, e)[0]
 
 
 def _condense(Kq, Fu, Fx, Y, Bs, where):
@@ -377,8 +433,7 @@ def drive_map(ss: StateSpace) -> tuple[np.ndarray, Any, Any] | None:
     velocity drive) is w·z + Du·u + Dud·u̇ when the network is linear; None
     without a drive."""
     if ss.kind == "velocity":
-        # Q = h·(M a + D v + K x), contracted with h first (vectors only)
-        a, b, c = ss.M.T @ ss.h, ss.D.T @ ss.h, ss.K.T @ ss.h
+        a, b, c = ss.drive_rows()
         return (a @ (ss.Cv @ ss.A) + b @ ss.Cv + c @ ss.Cx,
                 a @ (ss.Cv @ ss.B) + b @ ss.Dv + c @ ss.Dx, a @ ss.Dv + b @ ss.Ev)
     return (ss.g @ ss.Cv, ss.g @ ss.Dv, ss.g @ ss.Ev) if ss.kind == "force" else None

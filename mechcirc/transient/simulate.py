@@ -577,7 +577,7 @@ def _drive_output(ss, affine, drive_y, index, X, V, Acc, clear: dict, law_cache:
         return None, (affine(*dmap, Cz=drive_y) if dmap is not None else None)
     if dmap is None:
         # Q = h·(M a + D v + K x + Σ g_e f_e): contract with h first (vectors only).
-        a, b, c = ss.M.T @ ss.h, ss.D.T @ ss.h, ss.K.T @ ss.h
+        a, b, c = ss.drive_rows()
         Q = Acc @ a + V @ b + X @ c
     else:
         Q = affine(*dmap, Cz=drive_y)
