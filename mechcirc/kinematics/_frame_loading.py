@@ -151,12 +151,9 @@ class FrameLoading:
                         ("F_D", self.F_D)):
             cols[f"{name}x_N"], cols[f"{name}y_N"] = F[:, 0], F[:, 1]
             cols[f"{name}_abs_N"] = np.hypot(F[:, 0], F[:, 1])
-        cols["S_x_N"], cols["S_y_N"] = S[:, 0], S[:, 1]
-        cols["S_abs_N"] = self.shaking_force_magnitude
-        cols["T_Nm"] = self.torque
-        cols["T_a_Nm"], cols["T_d_Nm"] = self.T_a, self.T_d
-        cols["T_d_printed_Nm"] = self.T_d_printed
-        return cols
+        return cols | {"S_x_N": S[:, 0], "S_y_N": S[:, 1], "S_abs_N": self.shaking_force_magnitude,
+                       "T_Nm": self.torque, "T_a_Nm": self.T_a, "T_d_Nm": self.T_d,
+                       "T_d_printed_Nm": self.T_d_printed}
 
     def to_dataframe(self):
         """:meth:`columns` as a ``pandas.DataFrame``, a row per crank angle; ``attrs["units"]``

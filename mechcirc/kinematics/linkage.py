@@ -418,11 +418,9 @@ class Linkage(Memos):
             raise GeometryError(f"{self.source}: no assembly for crank angles {crank_angles} "
                                 "near the given coordinates (the links cannot close there); "
                                 "give angles the linkage reaches, or near= closer to one")
-        pts = {}
         # each point on its owner's frame (the plan's: its first link), or on the ground
-        for (p, x), o, s in zip(self.pose.items(), self._plan.owner, self._plan.offsets):
-            pts[p] = x.copy() if o == len(self.links) else \
-                q[3 * o:3 * o + 2] + _rot(q[3 * o + 2]) @ s
+        pts = {p: x.copy() if o == len(self.links) else q[3 * o:3 * o + 2] + _rot(q[3 * o + 2]) @ s
+               for (p, x), o, s in zip(self.pose.items(), self._plan.owner, self._plan.offsets)}
         return {"q": q, "points": pts}
 
 

@@ -942,11 +942,9 @@ def _solve_dyads(lk, pl, t, dt_max, cross=(), zones=()):
     qd = _pack(v, w)
     if nc == 1:                     # one crank: its part is the whole velocity
         parts = qd[:, :, None]
-    else:
-        parts = np.empty((len(t), 3 * pl.nb, nc))
-        for j, wc in enumerate(np.diag(pl.omega)):     # crank j turning, the others stopped
-            wj, vj, _ = ds.velocities(E, r, inner, wc)
-            parts[:, :, j] = _pack(vj, wj)
+    else:                           # crank j turning, the others stopped
+        parts = np.stack([_pack(vj, wj) for wj, vj, _ in
+                          (ds.velocities(E, r, inner, wc) for wc in np.diag(pl.omega))], axis=2)
     al, a = ds.accelerations(E, r, inner, w, sdot)
     return _pack(r, phi), qd, _pack(a, al), parts
 

@@ -122,8 +122,7 @@ def draw_design(design, ax):
     ax.plot(a * np.cos(th), a * np.sin(th), color="0.6", lw=0.8)
     ax.plot([0, d], [0, 0], "k^", ms=9)
     ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel("x [mm]")
-    ax.set_ylabel("y [mm]")
+    ax.set(xlabel="x [mm]", ylabel="y [mm]")
     ax.grid(alpha=0.3)
     ax.legend(fontsize="small", loc="best")
     ax.set_title(f"#1: a={design.a:.2f} b={design.b:.2f} c={design.c:.2f} d={design.d:.2f} mm")
@@ -170,8 +169,8 @@ def plot_synthesis(designs, n: int = 721, fig=None):
         ax[1].plot(deg, st.nu, lw=1.2, label=label)
     ax[0].axhline(45, color="r", ls="--", lw=0.8, label="γ = 45° (eq. 3)")
     ax[0].set_ylabel("transmission angle γ [deg]")
-    ax[1].set_ylabel("rocker acceleration d²Φ/dθ² [1/rad]")
-    ax[1].set_xlabel("crank angle from the front dead centre [deg]")
+    ax[1].set(ylabel="rocker acceleration d²Φ/dθ² [1/rad]",
+              xlabel="crank angle from the front dead centre [deg]")
     for a in ax:
         a.grid(alpha=0.3)
     ax[0].legend(fontsize="small", loc="best")
@@ -250,14 +249,12 @@ def plot_shaking(result, fig=None):
     a.plot([0, S[k, 0]], [0, S[k, 1]], "r-", lw=1,
            label=f"max |S| = {mag[k]:.4g} N at θ = {deg[k]:.1f}°")
     a.set_aspect("equal", adjustable="datalim")
-    a.set_xlabel("S_x [N]")
-    a.set_ylabel("S_y [N]")
-    a.set_title("shaking force on the frame, polar curve (Fig. 5)")
+    a.set(xlabel="S_x [N]", ylabel="S_y [N]",
+          title="shaking force on the frame, polar curve (Fig. 5)")
     a.legend(fontsize="small", loc="best")
     a = ax[0, 1]
     a.plot(deg, mag, "k", lw=1.4)
-    a.set_ylabel("|S| [N]")
-    a.set_title("shaking force magnitude (Fig. 6)")
+    a.set(ylabel="|S| [N]", title="shaking force magnitude (Fig. 6)")
     _curves(ax[1, 0], result.theta, "bearing force [N]",
             ("|F_A| (crankshaft bearing)", np.hypot(*result.F_A.T)),
             ("|F_D| (rocking-shaft bearing)", np.hypot(*result.F_D.T)))
@@ -318,7 +315,6 @@ def plot_linkage(linkage, state, paths=None, *, ax=None, fig=None):
     a.set_aspect("equal")
     a.grid(alpha=0.3)
     unit = getattr(linkage, "units", "") or "length"
-    a.set_xlabel(f"x [{unit}]")
-    a.set_ylabel(f"y [{unit}]")
+    a.set(xlabel=f"x [{unit}]", ylabel=f"y [{unit}]")
     a.set_title(f"{linkage.name} at θ = {math.degrees(state.theta):.4g}° (first crank)")
     return a if ax is not None else fig

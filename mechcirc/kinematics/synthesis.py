@@ -787,9 +787,6 @@ def _conflicts(passes: dict, valid) -> tuple[tuple[str, ...], ...]:
         for combo in itertools.combinations(names, size):
             if any(set(f) <= set(combo) for f in found):
                 continue
-            joint = valid.copy()
-            for n in combo:
-                joint &= passes[n]
-            if not joint.any():
+            if not np.logical_and.reduce([valid, *(passes[n] for n in combo)]).any():
                 found.append(combo)
     return tuple(found)
