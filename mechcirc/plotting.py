@@ -752,7 +752,7 @@ def plot_periodic(result, title: str | None = None, *, fig=None):
                                       gridspec_kw={"width_ratios": [3, 2]})
     _periodic_angle_panel(ax_q, result, f"{word} [{u['Q']}]")
     with np.errstate(all="ignore"):
-        amp = np.abs(result.amplitude)
+        amp, absK = np.abs(result.amplitude), np.abs(result.K)
     top = float(np.max(amp[np.isfinite(amp)], initial=0.0))
     floor = top * 1e-6 if top > 0 else 1.0
     ok = np.isfinite(amp) & (amp >= floor)           # the spectrum down to 1e-6 of its top
@@ -761,8 +761,6 @@ def plot_periodic(result, title: str | None = None, *, fig=None):
     ax_s.set(yscale="log", ylim=(floor, 2 * top if top > 0 else 10.0), xscale="log",
              xlabel="ω = kΩ [rad/s]", ylabel=f"|Q_k| [{u['Q']}]")
     ax_k = ax_s.twinx()
-    with np.errstate(all="ignore"):
-        absK = np.abs(result.K)
     good = np.isfinite(absK) & (absK > 0)
     ax_k.loglog(result.omega[good], absK[good], color="0.4", lw=0.9, label="|K(kΩ)|")
     ax_k.set_ylabel(f"|K| [{u['K']}]")

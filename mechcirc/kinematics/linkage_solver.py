@@ -479,9 +479,7 @@ def to_xy(z):
 
 def _with_ground(a, ground=0.0):
     """``a`` (N, nb), one column per moving body, with the ground's column (``ground``) last."""
-    out = np.full((a.shape[0], a.shape[1] + 1), ground, dtype=a.dtype)
-    out[:, :-1] = a
-    return out
+    return np.concatenate([a, np.full((len(a), 1), ground, dtype=a.dtype)], axis=1)
 
 
 def _point_kinematics(pl, q, qdot, qddot, parts):
@@ -1030,12 +1028,10 @@ class Newton:
         # prismatic rows after the joint rows: ns line rows, then ns angle rows
         self.ns = ns = len(pl.ga)
         self.c0 = 2 * m + 2 * ns                 # the first crank row
-        for k in range(ns):
-            J0[2 * m + ns + k, 3 * pl.gb[k] + 2] = 1.0
-            if pl.ga[k] < nb:
-                J0[2 * m + ns + k, 3 * pl.ga[k] + 2] = -1.0
-        for j, ci in enumerate(pl.crank_idx):
-            J0[self.c0 + j, 3 * ci + 2] = 1.0
+        angle_rows, moving = 2 * m + ns + np.arange(ns), pl.ga < nb
+        J0[angle_rows, 3 * pl.gb + 2] = 1.0
+        J0[angle_rows[moving], 3 * pl.ga[moving] + 2] = -1.0
+        J0[self.c0 + np.arange(len(pl.crank_idx)), 3 * pl.crank_idx + 2] = 1.0
         self.gu, self.gs, self.bs = to_complex(pl.gu), to_complex(pl.gs), to_complex(pl.bs)
         # flat indices of the φ-column entries, rows (2k, 2k+1) interleaved
         self.flat_a, self.flat_b = (

@@ -74,12 +74,10 @@ class LinearModel:
 
     def receptance(self, omega) -> NDArray[np.complex128]:
         """Complex amplitude X(ω)/Φ2 of each coordinate for φ2 = Φ2 e^{jωt}, shape (len(omega), n)."""
-        omega = np.atleast_1d(np.asarray(omega, dtype=float))
-        out = np.empty((omega.size, self.M.shape[0]), dtype=complex)
-        for i, w in enumerate(omega):
-            dyn = -w * w * self.M + 1j * w * self.C + self.K
-            out[i] = np.linalg.solve(dyn, self.K_drive + 1j * w * self.C_drive)
-        return out
+        w = np.atleast_1d(np.asarray(omega, dtype=float)).reshape(-1, 1, 1)
+        dyn = -w * w * self.M + 1j * w * self.C + self.K
+        x = np.linalg.solve(dyn, (self.K_drive + 1j * w[:, 0] * self.C_drive)[..., None])
+        return np.asarray(x[..., 0], dtype=np.complex128)
 
     def drive_moment(self, omega) -> NDArray[np.complex128]:
         """Moment the driven shaft must supply, per unit shaft *velocity* amplitude [N·m·s/rad].
