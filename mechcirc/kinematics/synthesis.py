@@ -44,6 +44,7 @@ of the linkage itself.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import itertools
 import math
@@ -580,22 +581,16 @@ def _candidates(grid, cols, ok, space, objective, limit, load, s_range, crank_ra
         des = dataclasses.replace(des, objective=grid_value, grid_objective=grid_value)
         if any(_same_shape(des, other) for other in designs):
             continue
-        if refine:
-            x = space.refine(objective, a, float(PSI[k]), float(BA[k]), float(OTHER[k]),
-                             int(ROOT[k]))
-            if x is not None:
-                try:
-                    r = evaluate_design(*x, load=load, swing_range=s_range,
-                                        crank_range=crank_range)
-                    # keep the refinement when it is feasible, no worse, and not
-                    # a shape already reported (several grid points often climb
-                    # to one optimum: the grid point then stands for itself)
-                    if r.feasible and better(value_of(r), grid_value) and \
-                            not any(_same_shape(r, other) for other in designs):
-                        des = dataclasses.replace(r, objective=value_of(r),
-                                                  grid_objective=grid_value)
-                except GeometryError:
-                    pass
+        if refine and (x := space.refine(objective, a, float(PSI[k]), float(BA[k]),
+                                         float(OTHER[k]), int(ROOT[k]))) is not None:
+            with contextlib.suppress(GeometryError):
+                r = evaluate_design(*x, load=load, swing_range=s_range, crank_range=crank_range)
+                # keep the refinement when it is feasible, no worse, and not
+                # a shape already reported (several grid points often climb
+                # to one optimum: the grid point then stands for itself)
+                if r.feasible and better(value_of(r), grid_value) and \
+                        not any(_same_shape(r, other) for other in designs):
+                    des = dataclasses.replace(r, objective=value_of(r), grid_objective=grid_value)
         designs.append(des)
         if len(designs) >= limit:
             break
