@@ -941,8 +941,8 @@ def _solve_dyads(lk, pl, t, dt_max, cross=(), zones=()):
     if nc == 1:                     # one crank: its part is the whole velocity
         parts = qd[:, :, None]
     else:                           # crank j turning, the others stopped
-        parts = np.stack([_pack(vj, wj) for wj, vj, _ in
-                          (ds.velocities(E, r, inner, wc) for wc in np.diag(pl.omega))], axis=2)
+        turning = (ds.velocities(E, r, inner, wc) for wc in np.diag(pl.omega))
+        parts = np.stack([_pack(vj, wj) for wj, vj, _ in turning], axis=2)
     al, a = ds.accelerations(E, r, inner, w, sdot)
     return _pack(r, phi), qd, _pack(a, al), parts
 
