@@ -271,9 +271,7 @@ def _particular(work: Circuit, index: dict, M: np.ndarray, Cons: np.ndarray,
     one saddle-point system ([M Cᵀ; C 0], whose least-squares solution was
     7e-8 off behind levers of ratios 185 and 919 and moved a free mass).
     """
-    nc = Cons.shape[0]
-    e = np.zeros(nc)
-    e[-1] = 1.0
+    e = np.eye(Cons.shape[0])[-1]
     d = work.require_drive()
     adj = adjacency(pair for group in force_groups(work.elements, work.levers) for pair in group)
     for a, b, sign in ((d.n1, d.n2, 1.0), (d.n2, d.n1, -1.0)):
@@ -295,9 +293,7 @@ def _particular(work: Circuit, index: dict, M: np.ndarray, Cons: np.ndarray,
 
 def _min_norm(C: np.ndarray) -> np.ndarray:
     """The minimum-norm solution of C h = e_last."""
-    e = np.zeros(C.shape[0])
-    e[-1] = 1.0
-    return la.lstsq(C, e)[0]
+    return la.lstsq(C, np.eye(C.shape[0])[-1])[0]
 
 
 def _condense(Kq, Fu, Fx, Y, Bs, where):
