@@ -153,3 +153,15 @@ def test_crosscheck_tolerance_covers_the_rounding_of_the_drives_force():
         # "disagreed" at the 1e-9 tolerance.  Now 1e-8 … 3e-8: a check still
         assert row["verdict"] == "agrees"
         assert row["rel_error"] <= row["tol"] <= 1e-7
+
+
+def test_a_floating_part_without_mass_moves_with_the_drive():
+    # n2 hangs on the drive's node by a spring and a damper: no free coordinate has mass
+    # (the rigid motion's check then reduced an empty array: exit 1 in the campaign)
+    net = mechcirc.parse("drive V n1 0 velocity=1\nspring k n2 n1 100\ndamper c n2 n1 1\n"
+                         "mass m n1 0 2\ndamper c0 n1 0 0.5\n")
+    w = 3.0
+    r = transient(net, 10.0, 0.01, f"harmonic:{w}", steady=True)
+    exact = 2.0 * w * np.cos(w * r.time) + 0.5 * np.sin(w * r.time)
+    assert np.abs(r.drive_force - exact).max() <= 1e-12 * np.abs(exact).max()  # 1.8e-13 abs
+    assert np.array_equal(r.x[:, 1], r.x[:, 0])

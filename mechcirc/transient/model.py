@@ -279,8 +279,8 @@ def _particular(work: Circuit, index: dict, M: np.ndarray, Cons: np.ndarray,
         if FRAME not in part:
             p = np.zeros(M.shape[0])
             p[[index[nd] for nd in part if nd in index]] = sign
-            scale = max(np.abs(M).max(), 1e-300)
-            if np.array_equal(Cons @ p, e) and np.abs(TB1.T @ (M @ p)).max() <= 1e-12 * scale:
+            if np.array_equal(Cons @ p, e) and np.abs(TB1.T @ (M @ p)).max(initial=0.0) \
+                    <= 1e-12 * np.abs(M).max(initial=1e-300):
                 return p
     p = _min_norm(Cons)
     if TB1.shape[1]:
