@@ -165,3 +165,81 @@ def test_a_floating_part_without_mass_moves_with_the_drive():
     exact = 2.0 * w * np.cos(w * r.time) + 0.5 * np.sin(w * r.time)
     assert np.abs(r.drive_force - exact).max() <= 1e-12 * np.abs(exact).max()  # 1.8e-13 abs
     assert np.array_equal(r.x[:, 1], r.x[:, 0])
+
+
+# seed 3, network 132: levers of ratio 336 and 0.0021, states from 1 to 5e5; the step's
+# exponential (‖A h‖₁ = 9e6) was 7.8e-9 off its largest entry, and the drive's node
+# itself 4.4e-5 off its closed form, at every step size
+LEVERS_336 = """drive V n1 0 velocity=1
+mass e0 n1 0 0.054005726311609076
+mass e1 n2 0 7.261201694898815
+spring e2 n3 n1 0.5697337076839106
+spring e3 n4 n1 7.609833970000285
+mass e4 n5 n2 2.86880913765386
+spring e5 n6 0 5.485047272382251
+spring e6 n5 n6 0.06034931476526494
+spring e7 n3 n6 13.670795767209935
+spring e8 n6 0 0.06409021697482378
+damper e9 n3 n1 0.0009398474819206114
+damper e10 n4 n1 0.009629800220275772
+damper e11 n5 n2 0.004098632646026707
+damper e12 n5 n6 0.00020187105010937003
+damper e13 n3 n6 0.05200524545394347
+lever L0 n2 0 n4 0 ratio=0.002132724191616918
+lever L1 n1 0 n6 0 ratio=336.21793817717133
+"""
+
+# seed 3, network 168: a mode at 7.54e-6 rad/s with ζ = 3.3e-9, driven at 0.97 × it
+SLOW_UNDAMPED = """drive V n1 0 velocity=1
+mass e0 n1 0 0.00014382614509522
+mass e1 n2 n1 0.003608579344657389
+mass e2 n3 0 0.001622642973082827
+mass e3 n4 n2 0.0002888459812747657
+mass e4 n4 n2 9861.343762446657
+spring e5 n2 n3 0.1408037686865702
+damper e6 n1 0 7.184173222574597e-06
+damper e7 n2 n3 0.00012413234662495286
+lever L0 n1 0 n2 0 ratio=44.19697706624031
+lever L1 n3 0 n4 0 ratio=501.010181283184
+"""
+
+
+@pytest.mark.parametrize("text, w, tol, x_tol", [
+    # measured: force 4.6e-11 (was 4.4e-5), x₁ 4.6e-11 (was 4.4e-5)
+    (LEVERS_336, 0.000924230746854527, 5e-10, 5e-10),
+    # measured: force 4.3e-15 (the crosscheck's fit was 2.6e-9 off), x₁ 1.0e-14
+    (SLOW_UNDAMPED, 7.315841146115354e-06, 1e-13, 1e-13),
+])
+def test_a_badly_scaled_network_keeps_its_steady_state(text, w, tol, x_tol):
+    from reference import mp_nodal
+
+    r = _steady(text, w, per_period=64)
+    t = r.time
+    Q0 = complex(1 / mp_nodal.K(mp_nodal.spec_of(text), 1j * w))
+    exact = np.imag(Q0 * np.exp(1j * w * t))
+    X = -np.cos(w * t) / w
+    assert np.abs(r.drive_force - exact).max() <= tol * abs(Q0)
+    assert np.abs(r.x[:, 0] - X).max() <= x_tol * np.abs(X).max()
+
+
+def test_the_step_map_of_a_badly_scaled_network_against_mpmath():
+    from mechcirc.transient.propagate import _augmented, discretise, map_error
+    from mechcirc.transient.simulate import periodic_start, state_model, with_oscillator
+    from mechcirc.transient.waveform import Waveform
+
+    w = 0.000924230746854527
+    net = mechcirc.parse(LEVERS_336)
+    ss = state_model(net, True)
+    aug, _ = with_oscillator(ss, periodic_start(ss, Waveform("harmonic", omega=w), 1.0, net,
+                                                True), w, 1.0)
+    h = 2 * math.pi / w / 64
+    big = _augmented(aug.A, aug.B, h)
+    with mpmath.workdps(60):
+        E = mpmath.expm(mpmath.matrix(big.tolist()))
+        exact = np.array([[float(E[i, j]) for j in range(E.cols)] for i in range(E.rows)])
+    N = aug.size
+    Phi, G1, G2 = discretise(aug.A, aug.B, h)
+    err = max(np.abs(Phi - exact[:N, :N]).max(), np.abs(G1 - exact[:N, N]).max(),
+              np.abs(G2 - exact[:N, N + 1]).max()) / np.abs(exact).max()
+    assert err <= 1e-12                    # measured 1.2e-13 (7.8e-9 unbalanced)
+    assert err <= map_error(aug.A, aug.B, h)       # (2.5e-13: the run's estimate holds)

@@ -380,8 +380,7 @@ def _clearance_map(clear: list, index: dict, N: int, M11_inv, Y1, T, massive: bo
 
 def _initial(circuit, nodes, index, Cx, Cv, N, vel):
     """State z0 matching the ``.ic`` lines (least squares; a warning if not attainable)."""
-    notes = []
-    z0 = np.zeros(N)
+    z0, notes = np.zeros(N), []
     if not circuit.initial:
         return z0, notes
     n = len(nodes)

@@ -59,11 +59,13 @@ def map_error(A: np.ndarray, B: np.ndarray, h: float) -> float:
     """
     if not np.abs(A * h).sum(axis=0).max(initial=0.0) > MAP_CHECK_NORM:
         return ROUNDING_PER_STEP
-    big = _augmented(A, B, h)
+    big, s = _balanced(_augmented(A, B, h))
     whole = la.expm(big)
-    diff = max(float(np.abs(np.linalg.matrix_power(la.expm(big / k), k) - whole).max())
-               for k in (3, 5))
-    return max(ROUNDING_PER_STEP, 3 * diff / max(float(np.abs(whole).max()), 1e-300))
+    diff = np.maximum(*(np.abs(np.linalg.matrix_power(la.expm(big / k), k) - whole)
+                        for k in (3, 5)))
+    scale = s[:, None] / s[None, :]          # (the differences as the run's map has them)
+    return max(ROUNDING_PER_STEP, 3 * float((diff * scale).max())
+               / max(float(np.abs(whole * scale).max()), 1e-300))
 
 
 def drive_gain(ss: StateSpace, h: float, nt: int) -> float:
@@ -141,8 +143,20 @@ def propagate_linear(ss: StateSpace, z0, u_in, h, elements, velocities):
 def discretise(A: np.ndarray, B: np.ndarray, h: float):
     """(Φ, Γ₁, Γ₂) of the first-order hold: z⁺ = Φ z + Γ₁ u + Γ₂ (u⁺ − u)."""
     N = A.shape[0]
-    E = la.expm(_augmented(A, B, h))
+    big, s = _balanced(_augmented(A, B, h))
+    E = s[:, None] * la.expm(big) / s[None, :]
     return E[:N, :N], E[:N, N], E[:N, N + 1]
+
+
+def _balanced(M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(S⁻¹ M S, s), S = diag(s) of powers of 2 (exact), where that halves ‖M‖₁ at
+    least, else (M, 1): e^M = S e^{S⁻¹MS} S⁻¹.  The exponential's error grows with the
+    norm it squares from; a velocity-driven lever network (ratio 336, states from
+    1 to 5e5) had a map 7.8e-9 off its largest entry, balanced 1.2e-13 (mpmath), and
+    its steady drive force was 4.4e-5 off (crosscheck campaign, seed 3, network 132).
+    """
+    Mb, (s, _) = la.matrix_balance(M, permute=False, separate=True)
+    return (M, np.ones(M.shape[0])) if la.norm(Mb, 1) > 0.5 * la.norm(M, 1) else (Mb, s)
 
 
 def _augmented(A: np.ndarray, B: np.ndarray, h: float) -> np.ndarray:
@@ -172,18 +186,15 @@ def propagate_blocks(A, B, z0, u, h, block: int | None = None) -> np.ndarray:
     steps = nt - 1
     L = block or max(1, min(steps, int(math.sqrt(steps)) + 1))
     nb = -(-steps // L)
-    up = np.empty(nb * L + 1)
-    up[:nt] = u
-    up[nt:] = u[-1]
+    up = np.concatenate([u, np.full(nb * L + 1 - nt, u[-1])])
     ub, dub = up[:-1].reshape(nb, L), np.diff(up).reshape(nb, L)
-    # Input responses h_m = Φᵐ Γ for m < L (matrix-vector products).
-    H1, H2 = np.empty((L, N)), np.empty((L, N))
-    H1[0], H2[0] = G1, G2
+    # Input responses h_m = Φᵐ [Γ₁ Γ₂] for m < L.
+    H = np.empty((L, N, 2))
+    H[0] = np.column_stack([G1, G2])
     for m in range(1, L):
-        H1[m] = Phi @ H1[m - 1]
-        H2[m] = Phi @ H2[m - 1]
+        H[m] = Phi @ H[m - 1]
     # Forcing accumulated over a whole block: Σ_i h[L−1−i] w_i.
-    Fend = ub @ H1[::-1] + dub @ H2[::-1]
+    Fend = ub @ H[::-1, :, 0] + dub @ H[::-1, :, 1]
     PL = np.linalg.matrix_power(Phi, L)
     starts, z = np.empty((nb, N)), np.asarray(z0, float).copy()
     for b in range(nb):

@@ -575,12 +575,9 @@ def _drive_output(ss, affine, drive_y, index, X, V, Acc, clear: dict, law_cache:
     dmap = drive_map(ss) if ss.kind == "force" or not clear else None
     if ss.kind != "velocity":
         return None, (affine(*dmap, Cz=drive_y) if dmap is not None else None)
-    if dmap is None:
-        # Q = h·(M a + D v + K x + Σ g_e f_e): contract with h first (vectors only).
-        a, b, c = ss.drive_rows()
-        Q = Acc @ a + V @ b + X @ c
-    else:
-        Q = affine(*dmap, Cz=drive_y)
+    # Q = h·(M a + D v + K x + Σ g_e f_e): contracted with h first (vectors only)
+    Q = affine(*dmap, Cz=drive_y) if dmap is not None else \
+        sum(S @ r for S, r in zip((Acc, V, X), ss.drive_rows()))
     for name, (e, _comp) in clear.items():
         ge = incidence(index, e.n1, e.n2, len(ss.nodes))
         Q = Q + law_cache[name][0] * (ge @ ss.h)
