@@ -120,15 +120,21 @@ def backlash_elements(circuit: Circuit) -> list[tuple[Element, Element | None]]:
     return out
 
 
-def _split(S: np.ndarray, basis: np.ndarray, rel: float = 1e-11):
-    """Orthonormal bases of the range and null space of a PSD matrix restricted to ``basis``."""
+def _split(S: np.ndarray, basis: np.ndarray, full: float, rel: float = 1e-11):
+    """Orthonormal bases of the range and null space of a PSD matrix restricted to ``basis``.
+
+    An eigenvalue counts when above ``rel`` × the largest and above 1e-13 × ``full``
+    (the node matrix's largest entry): the restriction's rounding is of order
+    ε × ``full``, and a direction with none of S (a lever-held node pair beside
+    the velocity-driven mass) came out with mass 1e-34, made a massive state
+    whose A held 1.5e48, and no periodic state existed at any ω (crosscheck
+    campaign, seed 3, network 116).
+    """
     if basis.shape[1] == 0:
         return basis, basis
     R = basis.T @ S @ basis
-    R = 0.5 * (R + R.T)
-    w, U = la.eigh(R)
-    scale = max(np.abs(w).max(), 0.0)
-    big = w > rel * scale if scale > 0 else np.zeros(w.shape, bool)
+    w, U = la.eigh(0.5 * (R + R.T))
+    big = w > max(rel * np.abs(w).max(), 1e-13 * full, 0.0)
     return basis @ U[:, big], basis @ U[:, ~big]
 
 
@@ -163,7 +169,7 @@ def state_space(circuit: Circuit, *, linearise: bool = False) -> StateSpace:
     T = np.eye(n) if Cons.shape[0] == 0 else la.null_space(Cons, rcond=1e-12)
     nq = T.shape[1]
     Mq, Dq, Kq = (T.T @ X @ T for X in (M, D, K))
-    B1, B0 = _split(Mq, np.eye(nq))
+    B1, B0 = _split(Mq, np.eye(nq), np.abs(M).max(initial=0.0))
     p = _particular(work, index, M, Cons, T @ B1) if vel and d is not None else np.zeros(n)
     # Generalised force per unit drive value u and per unit drive displacement X.
     if kind == "force":
@@ -172,7 +178,7 @@ def state_space(circuit: Circuit, *, linearise: bool = False) -> StateSpace:
         Fu, Fx = -(T.T @ D @ p), -(T.T @ K @ p)
     else:
         Fu, Fx = np.zeros(nq), np.zeros(nq)
-    Bd, Bs = _split(Dq, B0)
+    Bd, Bs = _split(Dq, B0, np.abs(D).max(initial=0.0))
     n1, n0, ns = B1.shape[1], Bd.shape[1], Bs.shape[1]
     Y = np.hstack([B1, Bd])
     Ky, Fyu, Fyx, S_y, S_u, S_x = _condense(Kq, Fu, Fx, Y, Bs, (T, nodes))
