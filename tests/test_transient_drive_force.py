@@ -289,3 +289,59 @@ def test_a_massless_lever_pair_does_not_undamp_a_force_driven_mass():
     exact = np.imag(v0 * np.exp(1j * w * r.time))
     # measured 4.6e-15 (refused before: "no periodic steady state")
     assert np.abs(r.drive_velocity - exact).max() <= 1e-11 * abs(v0)
+
+
+# seed 3, network 280: an anti-resonance at 0.0248 rad/s beside modes at 0.6 and 1.2 rad/s
+# and 1e2 faster ones; its record is stepped at 50.7 s (‖A h‖₁ ≫ 64)
+SLOW_BESIDE_STIFF = """drive V n1 0 velocity=1
+mass e0 n1 0 12.573045827174694
+mass e1 n2 n1 5.565550002457061
+mass e2 n3 n2 0.0019974388029801297
+mass e3 n4 n2 0.12325010161902523
+mass e4 n5 n3 78.91600898690669
+spring e5 n6 n1 0.016495511417932915
+spring e6 n7 n6 0.0030058506973484667
+spring e7 n5 n7 2126.178304243393
+spring e8 n4 n2 0.03747066244936982
+spring e9 n6 n4 201.37852871795306
+damper e10 n3 n2 8.8179132934568e-07
+damper e11 n4 n2 1.3304025595840177e-05
+damper e12 n5 n3 0.015048386717157953
+damper e13 n7 n6 6.108317627801676e-05
+damper e14 n4 n2 0.0016624845882167944
+damper e15 n6 n4 4.953395462306365
+lever L0 n4 0 n2 0 ratio=0.06197125707537377
+"""
+
+
+def test_crosscheck_pole_tolerance_covers_the_step_maps_own_error():
+    import dataclasses
+
+    import scipy.linalg as la
+
+    from mechcirc.transient import crosscheck
+    from mechcirc.transient.propagate import discretise
+    from mechcirc.transient.simulate import state_model
+
+    net = mechcirc.parse(SLOW_BESIDE_STIFF)
+    cc = crosscheck(net, n_steady=1)
+    slow = [r for r in cc.resonances if r["omega"] < 0.1]
+    assert len(slow) == 1 and all(r["verdict"] == "agrees" for r in cc.resonances)
+    row = slow[0]
+    # the record's pole is 1.3e-8 off ("disagrees" at 1e-9 before); the tolerance 2.9e-8
+    assert row["rel_error"] <= row["tol"] <= 1e-7
+    # independent: the force-driven model's A has the frequency domain's pole (its
+    # eigenvalue in mpmath), and the float step map's eigenvalue is what is off
+    d = net.require_drive()
+    ss = state_model(dataclasses.replace(net, drive=dataclasses.replace(d, kind="force")), True)
+    s_fd = complex(-row["zeta"] * row["omega"], row["omega_d"])
+    with mpmath.workdps(30):
+        lam = [complex(x) for x in mpmath.eig(mpmath.matrix(ss.A.tolist()), left=False,
+                                              right=False)]
+    lam_a = min(lam, key=lambda x: abs(x - s_fd))
+    assert abs(lam_a - s_fd) <= 1e-9 * abs(s_fd)             # the model: measured 3e-11
+    h = math.pi / (2.5 * row["omega"])
+    mu = la.eigvals(discretise(ss.A, ss.B, h)[0])
+    mu_a = mu[np.argmin(np.abs(mu - np.exp(lam_a * h)))]
+    map_pole_error = abs(mu_a - np.exp(lam_a * h)) / abs(mu_a * h * lam_a)
+    assert 3e-9 <= map_pole_error <= row["tol"]              # the map: measured 1.3e-8

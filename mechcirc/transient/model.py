@@ -336,36 +336,27 @@ def _dynamics(My, Dy, Ky, Fyu, Fyx, n1: int, n0: int, vel: bool):
     N = 2 * n1 + n0 + (1 if vel else 0)
     A, Bv = np.zeros((N, N)), np.zeros(N)
     i_y1, i_v1, i_y0 = slice(0, n1), slice(n1, 2 * n1), slice(2 * n1, 2 * n1 + n0)
-    iX = N - 1
+
+    def force(r):       # rows r of the forces over z, −K y − D₁ v1 (+ Fx X): not y0's damping
+        out = np.zeros((len(Fyu[r]), N))
+        out[:, i_y1], out[:, i_v1], out[:, i_y0] = -Ky[r, :n1], -Dy[r, :n1], -Ky[r, n1:]
+        if vel:
+            out[:, N - 1] = Fyx[r]
+        return out
     # ẏ0 = D00⁻¹ (F0 − D01 v1 − K0 y)  as  rows over z and u
     dy0_z, dy0_u = np.zeros((n0, N)), np.zeros(n0)
     if n0:
         D00_inv = la.inv(Dy[n1:, n1:])
-        dy0_z[:, i_v1] = -D00_inv @ Dy[n1:, :n1]
-        dy0_z[:, i_y1] = -D00_inv @ Ky[n1:, :n1]
-        dy0_z[:, i_y0] = -D00_inv @ Ky[n1:, n1:]
-        if vel:
-            dy0_z[:, iX] = D00_inv @ Fyx[n1:]
-        dy0_u = D00_inv @ Fyu[n1:]
+        dy0_z, dy0_u = D00_inv @ force(slice(n1, None)), D00_inv @ Fyu[n1:]
     A[i_y1, i_v1] = np.eye(n1)
-    A[i_y0] = dy0_z
-    Bv[i_y0] = dy0_u
+    A[i_y0], Bv[i_y0] = dy0_z, dy0_u
     M11_inv = np.zeros((0, 0))
     if n1:
         M11_inv = la.inv(My[:n1, :n1])
-        acc_z = np.zeros((n1, N))
-        acc_z[:, i_v1] = -Dy[:n1, :n1]
-        acc_z[:, i_y1] = -Ky[:n1, :n1]
-        acc_z[:, i_y0] = -Ky[:n1, n1:]
-        acc_u = Fyu[:n1].copy()
-        if vel:
-            acc_z[:, iX] = Fyx[:n1]
-        acc_z -= Dy[:n1, n1:] @ dy0_z
-        acc_u -= Dy[:n1, n1:] @ dy0_u
-        A[i_v1] = M11_inv @ acc_z
-        Bv[i_v1] = M11_inv @ acc_u
+        A[i_v1] = M11_inv @ (force(slice(0, n1)) - Dy[:n1, n1:] @ dy0_z)
+        Bv[i_v1] = M11_inv @ (Fyu[:n1] - Dy[:n1, n1:] @ dy0_u)
     if vel:
-        Bv[iX] = 1.0
+        Bv[N - 1] = 1.0
     return A, Bv, M11_inv
 
 
