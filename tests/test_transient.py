@@ -658,6 +658,31 @@ def test_an_alias_a_little_off_its_prediction_is_still_an_alias():
     assert slow[0]["verdict"] == "cannot be measured" and "1283.38" in slow[0]["why"]
 
 
+def test_a_mode_its_partner_nearly_cancels_and_the_record_lacks_cannot_be_measured():
+    """Crosscheck campaign, seed 5, network 218: a resonance at 0.2260022 rad/s is 1.3e-6
+    (relative) from an anti-resonance, just beyond the 1e-6 that makes such a pair not
+    measurable; its ringing in the record is below the pencil's noise (the record's
+    poles: an alias of 104.5 rad/s and 1.5595 rad/s at 4.9e-7 of it), and the check
+    matched it with the 1.5595 one: "5.9 off: DISAGREES".  Within 1e-4 of its partner
+    and without a pole of its own in the record, it cannot be measured."""
+    net = mechcirc.parse(
+        "drive V n1 0 velocity=1\nmass e0 n1 0 1.5374156866381998\n"
+        "mass e1 n2 n1 0.7769216487118807\nmass e2 n3 0 1.3492722910661192\n"
+        "mass e3 n4 n3 0.06971158076590032\nspring e4 n5 n1 11.150192596952104\n"
+        "mass e5 n6 n2 17.42742580316508\nmass e6 n1 n3 28.39310609312837\n"
+        "spring e7 n3 n6 0.8902062043817741\nspring e8 n4 n5 0.17215383839960854\n"
+        "lever L0 n5 0 n3 0 ratio=0.0059030263787263485\n"
+        "lever L1 n2 0 n4 0 ratio=268.4139722428571\n")
+    res = net.resonances()
+    slow = sorted((r for r in res if r.omega < 1), key=lambda r: r.omega)
+    assert [r.kind for r in slow] == ["resonance", "antiresonance"]
+    assert 1e-6 < (slow[1].omega - slow[0].omega) / slow[0].omega < 1e-4
+    cc = crosscheck(net)
+    assert cc.verdict["disagree"] == 0
+    row = [r for r in cc.resonances if r["kind"] == "resonance" and r["omega"] < 1][0]
+    assert row["verdict"] == "cannot be measured" and "no ringing of it" in row["why"]
+
+
 def test_a_faster_mode_that_has_decayed_within_a_sample_has_no_alias():
     """exp(s·dt) of a mode that decays within one sample underflows to 0 and its "alias"
     log(0)/dt is infinite, whose distance from any pole (∞) is "within" 1e-6 of it (∞):
