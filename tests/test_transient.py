@@ -605,57 +605,52 @@ def test_crosscheck_of_a_network_without_independent_mode_shapes():
     assert all(row["verdict"] == "agrees" and row["tol"] <= 1e-8 for row in cc.steady_state)
 
 
-def test_crosscheck_does_not_match_a_mode_with_the_alias_of_a_faster_one():
-    """Crosscheck campaign, seed 2, network 49: anti-resonances at 0.015535 (next to a
-    resonance at 0.015543: it hardly rings at the drive) and 13.024 rad/s, undamped.
-    The slow one's record is sampled every π/(2.5·0.015535) = 80.9 s, where the fast one
-    rings at its alias, |((13.024·80.9 + π) mod 2π) − π| / 80.9 = 0.02498 rad/s; the
-    check matched the slow mode with it, "6.1e-01 off: DISAGREES".  K has no pole there
-    (the sweep at 0.02498 is finite and smooth), so the slow mode cannot be measured on
-    that record."""
-    net = mechcirc.parse(
-        "drive V n1 0 velocity=1\nmass e0 n1 0 0.11766276761355454\n"
-        "spring e1 n2 0 0.01803928357249917\nmass e2 n3 n1 1.236902847806824\n"
-        "spring e3 n4 0 124.01710739241156\nmass e4 n5 n3 0.9774074379192442\n"
-        "spring e5 n6 n1 3113.353041712637\nspring e6 n7 n6 0.02842780692712645\n"
-        "mass e7 n7 n4 117.65364071474413\nspring e8 n6 n3 9.373307020101037e-05\n"
-        "spring e9 n1 n4 23.759422259919553\n")
-    dt = math.pi / (2.5 * 0.01553486038)
-    alias = abs((13.02429916 * dt + math.pi) % (2 * math.pi) - math.pi) / dt
-    assert abs(alias - 0.0249836) < 1e-6
-    K = net.sweep(alias * np.array([0.999, 1.0, 1.001])).K
-    assert np.all(np.isfinite(K)) and np.ptp(np.abs(K)) < 1e-2 * np.abs(K).max()
-    cc = crosscheck(net)
-    assert cc.verdict["disagree"] == 0
-    slow = [r for r in cc.resonances if r["kind"] == "antiresonance" and r["omega"] < 1]
-    assert slow[0]["verdict"] == "cannot be measured" and "13.0243" in slow[0]["why"]
+# Crosscheck campaign, seed 2, network 49: anti-resonances at 0.015535 (next to a
+# resonance at 0.015543: it hardly rings at the drive) and 13.024 rad/s, undamped.  The
+# slow one's record is sampled every π/(2.5·0.015535) = 80.9 s, where the fast one rings
+# at its alias, |((13.024·80.9 + π) mod 2π) − π| / 80.9 = 0.02498 rad/s; the check
+# matched the slow mode with it, "6.1e-01 off: DISAGREES".
+ALIAS_49 = ("drive V n1 0 velocity=1\nmass e0 n1 0 0.11766276761355454\n"
+            "spring e1 n2 0 0.01803928357249917\nmass e2 n3 n1 1.236902847806824\n"
+            "spring e3 n4 0 124.01710739241156\nmass e4 n5 n3 0.9774074379192442\n"
+            "spring e5 n6 n1 3113.353041712637\nspring e6 n7 n6 0.02842780692712645\n"
+            "mass e7 n7 n4 117.65364071474413\nspring e8 n6 n3 9.373307020101037e-05\n"
+            "spring e9 n1 n4 23.759422259919553\n")
+# Seed 4, network 35: an undamped anti-resonance at 0.061461 rad/s is sampled every
+# 20.4 s, where the one at 1283.38 rad/s rings at its alias 0.078763 (26,000 rad a
+# sample: the fast mode's tiny error moves the alias by 6e-6 of itself), and the check
+# matched the slow mode with it, "2.8e-01 off: DISAGREES", since the rule wanted 1e-6;
+# nearer the alias than the mode is enough now.
+ALIAS_35 = ("drive V n1 0 velocity=1\nmass e0 n1 0 0.0006138606456960482\n"
+            "spring e1 n2 0 6.188229619138828e-05\nspring e2 n3 n1 4.72781731130501\n"
+            "spring e3 n4 n3 0.02118635560290202\nmass e4 n5 n3 0.1219364668416276\n"
+            "mass e5 n6 n4 0.0899307910247057\nspring e6 n7 n2 35.51685643627109\n"
+            "mass e7 n1 n2 1491.169701401873\nmass e8 n5 n4 5.592910649387806\n"
+            "spring e9 n3 n1 970.6505726322979\n"
+            "lever L0 n4 0 n3 0 ratio=0.0017990879138855926\n"
+            "lever L1 n7 0 n5 0 ratio=0.18948441544396766\n")
 
 
-def test_an_alias_a_little_off_its_prediction_is_still_an_alias():
-    """Crosscheck campaign, seed 4, network 35: an undamped anti-resonance at 0.061461
-    rad/s is sampled every π/(2.5·0.061461) = 20.4 s, where the one at 1283.38 rad/s rings
-    at its alias 0.078763 (26,000 rad a sample: the fast mode's tiny error moves the alias
-    by 6e-6 of itself), and the check matched the slow mode with it, "2.8e-01 off:
-    DISAGREES", since the alias rule wanted 1e-6.  Nearer the alias than the mode is
-    enough now; the message names the fast mode whose alias it is."""
-    net = mechcirc.parse(
-        "drive V n1 0 velocity=1\nmass e0 n1 0 0.0006138606456960482\n"
-        "spring e1 n2 0 6.188229619138828e-05\nspring e2 n3 n1 4.72781731130501\n"
-        "spring e3 n4 n3 0.02118635560290202\nmass e4 n5 n3 0.1219364668416276\n"
-        "mass e5 n6 n4 0.0899307910247057\nspring e6 n7 n2 35.51685643627109\n"
-        "mass e7 n1 n2 1491.169701401873\nmass e8 n5 n4 5.592910649387806\n"
-        "spring e9 n3 n1 970.6505726322979\n"
-        "lever L0 n4 0 n3 0 ratio=0.0017990879138855926\n"
-        "lever L1 n7 0 n5 0 ratio=0.18948441544396766\n")
-    dt = math.pi / (2.5 * 0.06146100479)
-    alias = abs((1283.384543 * dt + math.pi) % (2 * math.pi) - math.pi) / dt
-    assert abs(alias - 0.078763) < 1e-6
+@pytest.mark.parametrize("text, slow, fast, alias_expected, named", [
+    (ALIAS_49, 0.01553486038, 13.02429916, 0.0249836, "13.0243"),
+    (ALIAS_35, 0.06146100479, 1283.384543, 0.078763, "1283.38"),
+])
+def test_crosscheck_does_not_match_a_mode_with_the_alias_of_a_faster_one(
+        text, slow, fast, alias_expected, named):
+    """K has no pole at the alias (the sweep there is finite and smooth), so the slow mode
+    cannot be measured on that record; the message names the fast mode."""
+    net = mechcirc.parse(text)
+    dt = math.pi / (2.5 * slow)
+    alias = abs((fast * dt + math.pi) % (2 * math.pi) - math.pi) / dt
+    assert abs(alias - alias_expected) < 1e-6
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", mechcirc.UnloadedElementWarning)
+        K = net.sweep(alias * np.array([0.999, 1.0, 1.001])).K
         cc = crosscheck(net)
+    assert np.all(np.isfinite(K)) and np.ptp(np.abs(K)) < 1e-2 * np.abs(K).max()
     assert cc.verdict["disagree"] == 0
-    slow = [r for r in cc.resonances if r["kind"] == "antiresonance" and r["omega"] < 1]
-    assert slow[0]["verdict"] == "cannot be measured" and "1283.38" in slow[0]["why"]
+    row = [r for r in cc.resonances if r["kind"] == "antiresonance" and r["omega"] < 1][0]
+    assert row["verdict"] == "cannot be measured" and named in row["why"]
 
 
 def test_a_mode_its_partner_nearly_cancels_and_the_record_lacks_cannot_be_measured():
