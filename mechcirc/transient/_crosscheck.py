@@ -198,7 +198,7 @@ def _judge_mode(row: dict, r, others, s: np.ndarray, parts: tuple, dt: float,
     if len(mapped):
         z = np.exp(expected * dt)
         at = [mu[np.argmin(np.abs(mu - z))] for mu in mapped]
-        tol = max(tol, 3 * max(abs(m - at[0]) for m in at[1:]) / abs(at[0] * dt * expected))
+        tol = max(tol, 3 * float(max(abs(m - at[0]) for m in at[1:]) / abs(at[0] * dt * expected)))
     best = nearest_pole(s, expected, dt) if s.size else None
     if near < WEAK * abs(expected) and (best is None or any(
             abs(best - pole_of(o)) < abs(best - expected) for o in same if o is not r)):
