@@ -335,11 +335,15 @@ def test_crosscheck_pole_tolerance_covers_the_step_maps_own_error():
     # the record's pole is 1.3e-8 off ("disagrees" at 1e-9 before); the tolerance 2.9e-8,
     # a plain float as the rest of the row (it was numpy's float64 in the row's repr)
     assert row["rel_error"] <= row["tol"] <= 1e-7 and type(row["tol"]) is float
-    # independent: the force-driven model's A has the frequency domain's pole (its
-    # eigenvalue in mpmath), and the float step map's eigenvalue is what is off
+    # independent: the pole of K is a zero of det A(s) in mpmath; the force-driven model's
+    # A has it (its eigenvalue in mpmath), and the float step map's eigenvalue is what is off
+    from reference import mp_nodal
+
+    s_fd = mp_nodal.det_root(mp_nodal.spec_of(SLOW_BESIDE_STIFF),
+                             complex(-row["zeta"] * row["omega"], row["omega_d"]), pole=True)
+    assert abs(s_fd.imag - row["omega_d"]) <= 1e-12 * abs(s_fd)   # (the row's pole is it)
     d = net.require_drive()
     ss = state_model(dataclasses.replace(net, drive=dataclasses.replace(d, kind="force")), True)
-    s_fd = complex(-row["zeta"] * row["omega"], row["omega_d"])
     with mpmath.workdps(30):
         lam = [complex(x) for x in mpmath.eig(mpmath.matrix(ss.A.tolist()), left=False,
                                               right=False)]
