@@ -92,8 +92,7 @@ def separations(time, e, w, stiffness, damping, gap, name, omega_shaft=None):
         In time order; an opening at the first sample (never in contact
         before) is not one.
     """
-    half = 0.5 * gap
-    fd = damping * w
+    half, fd = 0.5 * gap, damping * w
     up = stiffness * (e - half)
     up = up + np.minimum(up, fd)                  # > 0: contact on the upper flank
     lo = stiffness * (e + half)

@@ -246,8 +246,7 @@ def follower(motion, rpm: float, mass: float, spring: float, preload: float,
                   rpm=rpm, rtol=rtol)
     omega = convert_frequency(rpm, "rpm", "rad/s")
     lo, ang = _least_contact(r, circuit.elements[0], omega)
-    theta = omega * r.time
-    z0 = preload / spring
+    theta, z0 = omega * r.time, preload / spring
     return FollowerResult(rpm=float(rpm), omega_shaft=omega, angle_deg=np.degrees(theta),
                           lift=motion.evaluate(theta)[0], rise=r.x[:, r.nodes.index("f")] - z0,
                           contact_force=r.element_force("kc"), min_contact=lo,
@@ -259,8 +258,7 @@ def _least_contact(r, kc, omega) -> tuple:
     """(least contact force [N], its shaft angle [rad]) of the run ``r``: the least sample,
     refined by the parabola through it and its neighbours; the far flank refused."""
     i_cam, i_f = r.nodes.index("cam"), r.nodes.index("f")
-    half = kc.backlash / 2
-    e = r.x[:, i_cam] - r.x[:, i_f]
+    half, e = kc.backlash / 2, r.x[:, i_cam] - r.x[:, i_f]
     if np.any(e < -half):
         raise MechcircError("the follower left the cam by more than the model's reach "
                             f"({2 * half:g} m): the far flank of the contact was hit")

@@ -158,8 +158,7 @@ def state_space(circuit: Circuit, *, linearise: bool = False) -> StateSpace:
     """
     clear, drop, work = _working(circuit, linearise)
     nodes, index, M, D, K, G = _node_matrices(work, clear)
-    n = len(nodes)
-    d = circuit.drive
+    n, d = len(nodes), circuit.drive
     g = np.zeros(n)
     if d is not None:
         g = incidence(index, d.n1, d.n2, n)
@@ -207,8 +206,7 @@ def _outputs(T, B1, Bd, Bs, S, p, A, Bv, vel):
     Qz[:, 2 * n1:2 * n1 + n0] = Bd + Bs @ S_y[:, n1:]
     if vel:
         Qz[:, N - 1] += Bs @ S_x
-    Cx = T @ Qz
-    Dx = T @ (Bs @ S_u)
+    Cx, Dx = T @ Qz, T @ (Bs @ S_u)
     if vel:
         Cx[:, N - 1] += p
     # v = d/dt x = Cx ż + Dx u̇ = Cx A z + Cx B u + Dx u̇
@@ -322,12 +320,10 @@ def _condense(Kq, Fu, Fx, Y, Bs, where):
             raise TopologyError(f"node(s) {', '.join(names)} can move with no mass, damping or "
                                 "spring resisting (their motion is undetermined): join them to "
                                 "the frame '0' or the drive's part, or remove them") from None
-        S_y = -Kss_inv @ (Bs.T @ Kq @ Y)
-        S_u = Kss_inv @ (Bs.T @ Fu)
+        S_y, S_u = -Kss_inv @ (Bs.T @ Kq @ Y), Kss_inv @ (Bs.T @ Fu)
         S_x = Kss_inv @ (Bs.T @ Fx)
     else:
-        S_y = np.zeros((0, Y.shape[1]))
-        S_u = S_x = np.zeros(0)
+        S_y, S_u, S_x = np.zeros((0, Y.shape[1])), np.zeros(0), np.zeros(0)
     KyS = Y.T @ Kq @ Bs
     return (Y.T @ Kq @ Y + KyS @ S_y, Y.T @ Fu - KyS @ S_u, Y.T @ Fx - KyS @ S_x,
             S_y, S_u, S_x)
@@ -369,8 +365,7 @@ def _clearance_map(clear: list, index: dict, N: int, M11_inv, Y1, T, massive: bo
         raise MechcircError(
             "clearances (backlash=) need mass at every node of the network "
             "(this one has massless nodes); add small masses or remove the clearance")
-    n1 = Y1.shape[1]
-    extra = np.zeros((N, len(clear)))
+    n1, extra = Y1.shape[1], np.zeros((N, len(clear)))
     for j, (e, _) in enumerate(clear):
         ge = incidence(index, e.n1, e.n2, T.shape[0])
         extra[n1:2 * n1, j] = M11_inv @ (Y1.T @ (T.T @ (-ge)))

@@ -122,8 +122,7 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
     drive = _waveform(circuit, waveform, rpm)
     amp = getattr(circuit.drive, "amplitude", 0.0) if amplitude is None else float(amplitude)
     t = _grid(t_end, dt, drive)
-    ss = state_model(circuit, linearise)
-    u = drive.sample(t, amp)
+    ss, u = state_model(circuit, linearise), drive.sample(t, amp)
     ss, z0, u_in, notes = _start(ss, drive, amp, u, steady, circuit, linearise)
     _flags(elements=elements, velocities=velocities)
     if backlash_elements(circuit) and not linearise:
@@ -162,36 +161,21 @@ def _linear_run(ss, circuit, z0, t, us, drive, notes, elements, velocities):
     """A linear run: exact propagation, its outputs and their error."""
     u, u_in = us
     h = t[1] - t[0]
-    Z, T, nx, drive_y, x_ready, v_ready, x_bound, err, path = propagate_linear(
+    Z, T, nx, drive_y, x_ready, v_ready, x_err, err, path = propagate_linear(
         ss, z0, u_in, h, elements, velocities)
     method = f"exact (matrix exponential, first-order hold of the drive; {path.split(' (')[0]})"
     notes.append(f"linear propagation: {path}")
     interp = _interpolation(t, u, drive, False, notes)
     out = _outputs(ss, circuit, t, Z, u, u_in, h, drive, method, err, notes, elements, T,
                    velocities, nx, drive_y, x_ready, v_ready)
-    out.error = _linear_error(out, ss, err, x_bound)
+    with np.errstate(all="ignore"):     # (the steps' error, else map error × steps × max|x|)
+        out.error = err + (x_err if x_err is not None else map_error(ss.A, ss.B, h) * (
+            t.size - 1) * _peak(out.x))
     if interp > 0.0:        # the drive's interpolation error, carried to x
         out.error += interp * drive_gain(ss, h, t.size)
     # (linear: the error is finite only if x is; NaN and ±inf reach max|x| or its bound)
     _require_finite(out, x_in_error=True)
     return out
-
-
-def _linear_error(out: TransientResult, ss: StateSpace, err: float,
-                  x_bound: float | None) -> float:
-    """Error of an exact (linear) run: ``err`` plus rounding, which adds up over
-    the steps: the one-step map's error (:func:`~.propagate.map_error`, at least
-    ROUNDING_PER_STEP) × max|x| per step (against closed forms: 3e-15 … 1.5e-12
-    relative after 2e3 … 1e5 steps, 4 … 150× below this).  ``x_bound`` bounds max|x|
-    (None: look at x)."""
-    h = float(out.time[1] - out.time[0]) if out.time.size > 1 else 0.0
-    known = ss.memo("_map_errors", dict)        # (by step: a repeated run computes none)
-    per_step = known[h] if h in known else known.setdefault(h, map_error(ss.A, ss.B, h))
-    with np.errstate(all="ignore"):
-        if x_bound is None or np.any(ss.Dx):  # (the drive's direct term changes x)
-            # (no |x| temporary the size of x: 1e7 values for 100 nodes × 1e5 steps)
-            x_bound = _peak(out.x)
-        return err + per_step * (out.time.size - 1) * x_bound
 
 
 def _waveform(circuit: Circuit, drive, rpm) -> Waveform:
@@ -212,8 +196,7 @@ def _start(ss: StateSpace, drive: Waveform, amp: float, u, steady: bool, circuit
     """(model, z(0), drive samples fed to it, notes): the impulse's jump, the periodic start,
     and a harmonic drive as two more states; the notes are the model's on its initial state
     and what this start implies."""
-    z0 = ss.initial[0].copy()
-    notes = list(ss.initial[1])
+    z0, notes = ss.initial[0].copy(), list(ss.initial[1])
     if drive.kind == "impulse":
         # u = amp·δ(t) in ż = A z + B u: the state jumps by B·amp.  A force impulse
         # gives the masses momentum and, through a damper, moves a massless
@@ -402,8 +385,7 @@ def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol, rate=None):
     (then the drive is interpolated by cubic Hermite between them, else linearly)."""
     kern = kernels()
 
-    N = ss.size
-    h = t[1] - t[0]
+    N, h = ss.size, t[1] - t[0]
     u = np.ascontiguousarray(u, dtype=float)
     mats, w_max = ss.memo("_clearance_setup", lambda: _clearance_setup(ss, circuit))
     # Steps may run across output times when the drive has no kinks there (it
@@ -450,8 +432,7 @@ def _nonlinear(ss: StateSpace, circuit, z0, t, u, rtol, rate=None):
               f"{rtol / REF_TOL:g} and steps ≤ {href:.3g} s; error estimate = the "
               f"difference from the run at rtol {rtol:g} (absolute tolerance rtol × each "
               "state's peak)")
-    peak_x = _peak(X)
-    notes = []
+    peak_x, notes = _peak(X), []
     if err > rtol * peak_x:
         notes.append(f"the estimated error of x, {err:.2g}, is {err / max(peak_x, 1e-300):.1e} "
                      f"of the largest |x| ({peak_x:.3g}): above --rtol {rtol:g}, which is "
@@ -472,8 +453,7 @@ def _absolute_tolerance(run: Callable, z0: np.ndarray, rtol: float, hmax: float)
     (repeated once if the solution stayed far below the start's scale, so the
     pilot's absolute tolerance was too loose for it: a run from rest has no
     scale; a solution far above it was only integrated more tightly)."""
-    N = z0.size
-    scale = max(float(np.abs(z0).max()), 0.0) or 1.0
+    N, scale = z0.size, max(float(np.abs(z0).max()), 0.0) or 1.0
     pilot_tol = max(rtol, 1e-4)
     for _ in range(2):
         peak = _peak(run(pilot_tol, np.full(N, pilot_tol * scale), hmax), axis=0)

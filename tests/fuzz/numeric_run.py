@@ -18,6 +18,7 @@ values over several decades), drawn from ``--seed``::
     python tests/fuzz/numeric_run.py peak_k --seed 3 --count 300
     python tests/fuzz/numeric_run.py clearance --seed 1 --count 80
     python tests/fuzz/numeric_run.py crosscheck --seed 2 --count 300
+    python tests/fuzz/numeric_run.py propagation --seed 2 --count 300
 
 * ``roots``: every root of ``find_resonances`` within its stated error of the
   zero of det A (an anti-resonance, a pole of K) or of det [[A, c], [cᵀ, 0]]
@@ -69,7 +70,10 @@ values over several decades), drawn from ``--seed``::
   say that rtol is not reached;
 * ``crosscheck``: ``mechcirc.transient.crosscheck`` on random networks; both
   domains are exact to their stated errors (the campaigns above), so a line
-  that disagrees is a defect of one of them or of the check.
+  that disagrees is a defect of one of them or of the check;
+* ``propagation``: each impulse response ``crosscheck`` runs (levers, rigid-body
+  pairs, slow modes beside stiff ones) within its ``error`` of mpmath's
+  propagation of the same state model (``expm`` of A·h at 40 digits).
 
 Each prints the cases outside their tolerance and a summary line.
 """
@@ -630,6 +634,59 @@ def crosscheck(seed: int, count: int) -> int:
     return bad
 
 
+def propagation(seed: int, count: int, dps: int = 40) -> int:
+    """The linear transient's ``error`` against mpmath's propagation of its own state
+    model (``expm`` of A·h at ``dps`` digits, z₀ = the initial state + B): the impulse
+    responses ``crosscheck`` rings (levers, rigid-body pairs, stiff and slow modes; the
+    ``transient`` campaign has none of these), models of up to 14 states."""
+    from mechcirc.transient import _crosscheck
+    from mechcirc.transient.simulate import state_model
+
+    runs: list = []
+    original = _crosscheck.transient
+
+    def spy(*args, **kw):
+        r = original(*args, **kw)
+        if args[3] == "impulse":
+            runs.append((args[0], r))
+        return r
+
+    _crosscheck.transient = spy
+    bad = checked = 0
+    ratios = []
+    try:
+        for i, text, _, _ in networks(seed, count):
+            runs.clear()
+            try:
+                _crosscheck.crosscheck(mechcirc.parse(text), n_steady=0)
+            except mechcirc.MechcircError:
+                continue
+            for circuit, r in runs:
+                ss = state_model(circuit, True)
+                if ss.A.shape[0] > 14 or r.time.size < 2 or not math.isfinite(r.error):
+                    continue
+                with mpmath.workdps(dps):
+                    P = mpmath.expm(mpmath.matrix(ss.A.tolist())
+                                    * mpmath.mpf(float(r.time[1] - r.time[0])))
+                    z = mpmath.matrix((ss.initial[0] + ss.B).tolist())
+                    C, X = mpmath.matrix(ss.Cx.tolist()), []
+                    for _ in range(r.time.size):
+                        X.append([float(v) for v in C * z])
+                        z = P * z
+                true = float(np.abs(r.x - np.array(X)).max())
+                checked += 1
+                ratios.append(true / r.error if r.error > 0 else math.inf)
+                if true > r.error:
+                    bad += 1
+                    print(f"net {i}: error {true:.3g} above its estimate {r.error:.3g} "
+                          f"({r.method})")
+    finally:
+        _crosscheck.transient = original
+    print(f"propagation, seed {seed}: {checked} runs, {bad} above their error; true/estimate "
+          f"largest {max(ratios, default=0):.3g}, median {np.median(ratios or [0]):.3g}")
+    return bad
+
+
 def batch(seed: int, count: int, designs: int = 6) -> int:
     rng = np.random.default_rng(seed + 4000)
     bad = checked = 0
@@ -681,7 +738,7 @@ def main(argv=None) -> int:
     ap.add_argument("campaign", choices=("roots", "peak", "sensitivity", "periodic", "modes",
                                          "sweep_sensitivity", "errors", "periodic_table",
                                          "transient", "batch", "peak_k", "peak_s",
-                                         "clearance", "crosscheck"))
+                                         "clearance", "crosscheck", "propagation"))
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--count", type=int, default=100)
     args = ap.parse_args(argv)
