@@ -57,6 +57,9 @@ NEAR = 0.03
 SPEED_CHUNK = 256
 #: The default error asked for, relative to the peak force.
 TOL = 1e-4
+#: A motion's Fourier coefficient at most this fraction of the largest is rounding
+#: (64ε; the closed form's rounding on a pure cosine law: about ε).
+_ENDED = 64 * float(np.finfo(float).eps)
 #: The most harmonics computed (the tail beyond is extrapolated).
 MAX_HARMONICS = 4096
 #: Damping ratio below which a resonance counts as undamped (as mechcirc.sweep).
@@ -319,8 +322,7 @@ def _tail_beyond(mag: np.ndarray) -> float:
     n = mag.size
     if n < 8:
         return math.inf
-    s1 = float(np.sum(mag[n // 4:n // 2]))
-    s2 = float(np.sum(mag[n // 2:]))
+    s1, s2 = float(np.sum(mag[n // 4:n // 2])), float(np.sum(mag[n // 2:]))
     if s2 == 0:
         return 0.0
     r = s2 / s1 if s1 > 0 else math.inf
@@ -400,9 +402,13 @@ def _harmonics_round(circuit, motion, Omega, kmax, tol, harmonics, method, done_
     anti-resonance in them hid a tail 18 times the estimate beyond it.  Such a root
     leaves a speed not done unless those octaves' sum, raised by its gain (the rise of
     |1/K| up to it, at most ∝ ω, times 1/(2|ζ|) at a resonance), is still small."""
-    P = Omega.size
-    c = motion.fourier(kmax)
-    k = np.arange(1, kmax + 1)
+    P, c, k = Omega.size, motion.fourier(kmax), np.arange(1, kmax + 1)
+    # A series that has ended (a crank's or an eccentric's cosine): every coefficient
+    # of the last four octaves at rounding level, which a law decaying as a power of k
+    # cannot be; they are dropped, and their share of the force counted as error below.
+    noise = np.where(np.abs(c) <= _ENDED * np.abs(c).max(initial=0.0), np.abs(c), 0.0)
+    ended = kmax >= 64 and not np.any(np.abs(c[kmax // 16:]) > noise[kmax // 16:])
+    c = np.where(noise > 0, 0.0, c) if ended else c
     sw = circuit.sweep(np.outer(Omega, k).ravel(), method=method)
     Qu = _unit_force(sw.K).reshape(P, kmax)
     V = 2 * Omega[:, None] * c[None, :]
@@ -432,6 +438,9 @@ def _harmonics_round(circuit, motion, Omega, kmax, tol, harmonics, method, done_
     err = tail[np.arange(P), n - 1]
     errK = sw.error.reshape(Qk.shape)
     err = err + np.sum(np.where(used & np.isfinite(errK), errK, 0.0) * mag, axis=1)
+    if ended:
+        err = err + np.sum(2 * Omega[:, None] * noise * np.abs(np.where(np.isfinite(Qu), Qu, 0)),
+                           axis=1)
     interp, coarse = np.zeros(P), getattr(motion, "coarse", None)
     if coarse is not None:
         dQ = np.abs(2 * Omega[:, None] * (c - coarse.fourier(kmax)) * Qu)

@@ -102,6 +102,25 @@ def test_pure_harmonic_motion_is_one_phasor():
     assert r.error <= 1e-12
 
 
+def test_a_cosine_law_driving_a_mass_directly_is_one_phasor_with_a_finite_error():
+    """An eccentric's motion x = S (1 − cos θ)/2 with the mass at the drive: |1/K| grows
+    as kΩ m, so the closed form's rounding-level coefficients (1e-17 m/s) gave flat
+    |Q_k| of 1.5e-12 N that no tail extrapolation could bound: 4096 harmonics, error
+    ∞ and the noise listed as the largest harmonics.  The series has ended there: one
+    harmonic, the peak of the closed form (S/2) Ω |j(Ωm − k/Ω) + c| (the mean k S/2 is
+    not part of the periodic force), at every speed of a map too."""
+    c = parse("drive V a 0 motion=harmonic rise=180 return=180 stroke=100 mm\n"
+              "mass m a 0 2\nspring k a 0 800\ndamper c a 0 4\n")
+    for rpm in (60, 300):
+        W = rpm_to_omega(rpm)
+        r = periodic(c, rpm)
+        peak = 0.05 * W * abs(1j * (W * 2 - 800 / W) + 4)
+        assert r.harmonics == 1 and r.error <= 1e-12
+        assert abs(r.peak - peak) <= 1e-13 * peak
+    m = speed_map(c, 30, 300, points=5)
+    assert np.all(m.harmonics == 1) and np.all(m.error <= 1e-12)
+
+
 def test_element_forces_and_velocities_sum_as_the_circuit_says():
     c = parse(SDOF)
     r = periodic(c, 900, elements=True, tol=1e-9)
