@@ -802,7 +802,7 @@ def _peak_search(circuit, method, quantity, lo, hi, brackets, best_value, best_o
     if inside:
         x, v = golden_max(magnitude, *np.array(inside).T, xtol)
         for xi, vi in zip(x.tolist(), v.tolist()):
-            if vi > best_value or not np.isfinite(best_value):
+            if vi > best_value or math.isnan(best_value):     # (∞ at a band's end stays)
                 best_value, best_omega = vi, xi
         if best_omega in x:               # solved alone, as a sweep at that ω gives it
             best_value = float(magnitude([best_omega])[0])

@@ -188,6 +188,18 @@ def test_undamped_peak_is_unbounded_and_named():
         assert s.peak().value == math.inf and s.peak().omega == pytest.approx(100.0, rel=1e-12)
 
 
+def test_a_band_from_zero_with_a_spring_at_the_drive_is_unbounded_at_zero():
+    """K(0) = 0 where a spring holds the driven node (|Q0| = V0 |jωm + c + k/(jω)| → ∞ as
+    ω → 0): the band's end ω = 0 is the peak.  The golden-section search around the
+    grid's best used to replace that ∞ by its own finite value (6.8e13 N at 1.2e-12
+    rad/s, and another value on each path)."""
+    c = mechcirc.parse("drive V a 0 velocity=0.1\nmass m a 0 2\nspring k a 0 800\n"
+                       "damper c a 0 4\n")
+    for p in (peak(c, 0.0, 100.0), c.sweep([0.0, 1.0]).peak(),
+              c.sweep(np.linspace(0.0, 100.0, 50)).peak()):
+        assert p.unbounded and p.value == math.inf and p.omega == 0.0
+
+
 def test_stb_peak_is_unbounded_not_the_grid_max():
     """Issue 11 §4: 6307 N on 400 points, 1.5e8 N on 2e6 points; the truth is ∞."""
     c = mechcirc.load(STB)
