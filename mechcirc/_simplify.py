@@ -35,12 +35,13 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from .circuit import FRAME, Circuit, Element
-from .errors import BandError, MechcircError, TopologyError
+from .errors import BandError, MechcircError, TopologyError, UnloadedElementWarning
 from .netlist_writer import write as write_netlist      # the package's one netlist writer
 from .sources import did_you_mean, summary_repr
 from .units import parse_omega
@@ -162,8 +163,15 @@ class Simplified:
 
 
 # ----------------------------------------------------------------- helpers
+def _trial_sweep(circuit: Circuit, omega):
+    """The sweep of a trial circuit: one that leaves an element without load is measured
+    (and refused), not warned about (the user was told of a trial's unloaded output)."""
+    with warnings.catch_warnings(action="ignore", category=UnloadedElementWarning):
+        return circuit.sweep(omega)
+
+
 def _output(circuit: Circuit, omega, output):
-    s = circuit.sweep(omega)
+    s = _trial_sweep(circuit, omega)
     with np.errstate(all="ignore"):
         return s.K if output is None else s.force(output)
 
@@ -179,8 +187,7 @@ def _unique(name, taken):
 
 def _exact(elements, levers, drive, protect, steps, taken):
     """Apply the exact clean-ups until none applies; returns (elements, levers)."""
-    levers = list(levers)
-    changed = True
+    levers, changed = list(levers), True
     while changed:
         fixed = {FRAME, drive.n1, drive.n2} | {n for lv in levers
                                               for n in lv.terminals}
@@ -245,10 +252,8 @@ def _merge_parallel(elements, protect, steps, taken):
     for (kind, _), es in groups.items():
         if len(es) < 2:
             continue
-        total = sum(e.value * e.eta for e in es)
-        name = _unique(f"{es[0].name}_par", taken)
-        new = Element(kind, name, es[0].n1, es[0].n2, total)
-        drop = {id(e) for e in es}
+        name, drop = _unique(f"{es[0].name}_par", taken), {id(e) for e in es}
+        new = Element(kind, name, es[0].n1, es[0].n2, sum(e.value * e.eta for e in es))
         elements = [e for e in elements if id(e) not in drop] + [new]
         merged.append(f"{'+'.join(_short([e.name for e in es]))} -> {name}")
     if merged:
@@ -359,8 +364,7 @@ def simplify(circuit: Circuit, band, tol: float, *, output: str | None = None,
     grid, y_full, skipped, inband = _check_grid(circuit, band, points, output)
     if grid.size == 0:
         raise MechcircError("the output is zero or infinite at every check point of the band")
-    search = _Search(circuit, grid, y_full, output, protect)
-    drive = circuit.require_drive()
+    search, drive = _Search(circuit, grid, y_full, output, protect), circuit.require_drive()
     taken = {e.name for e in circuit.elements} | {lv.name for lv in circuit.levers} | \
         {drive.name}
     current, steps, error = _exact_first(search, taken, tol)
@@ -435,7 +439,7 @@ class _Search:
         elements, levers = state
         try:
             c = Circuit(tuple(elements), self.circuit.drive, tuple(levers))
-            sw = c.sweep(self.grid)
+            sw = _trial_sweep(c, self.grid)
             V, Q = np.abs(sw.v0), np.abs(sw.Q0)
             out = []
             for e in elements:

@@ -86,6 +86,21 @@ def test_force_output_element_is_kept_and_its_force_checked():
     assert _rel_err(c, r.netlist, np.geomspace(5.0, 800.0, 300), "k3") <= r.error * (1 + 1e-9)
 
 
+def test_trials_that_unload_the_output_element_do_not_warn():
+    """Reducing the STB heald network with its rod k0 as the output: trial circuits that
+    leave k0 without load are measured and refused, and used to warn the user that k0
+    "carries no force" (4 warnings), though k0 stays loaded in the result."""
+    import warnings
+
+    c = mechcirc.load(STB)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        r = simplify(c, (10.0, 300.0), 0.01, output="k0")
+    assert not [w for w in caught if issubclass(w.category, mechcirc.UnloadedElementWarning)]
+    assert "k0" in {e.name for e in r.circuit.elements} and r.error <= 0.01
+    assert np.abs(r.circuit.sweep([100.0]).force("k0")).min() > 0
+
+
 @pytest.mark.parametrize("band,match", [((100.0, 100.0), "not below"), ((300.0, 10.0), "not below"),
                                         ((0.0, 10.0), "must be > 0"),
                                         ((1.0, float("inf")), "finite")])
