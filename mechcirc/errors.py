@@ -217,8 +217,7 @@ def did_you_mean(word: str, choices) -> str:
     """
     import difflib
 
-    choices = [str(c) for c in choices]
-    word = str(word)[:100]
+    choices, word = [str(c) for c in choices], str(word)[:100]
     # an option's leading dashes, which every option shares, do not make two alike
     # ('--node' is not near '--debug')
     bare = {c.lstrip("-"): c for c in reversed(choices)}

@@ -75,8 +75,7 @@ def explain(circuit: Circuit) -> tuple[list[Step], str]:
         labels[id(node)] = label
         operands: tuple[str, ...]
         if isinstance(node, Reflect):
-            r = node.lever.ratio
-            child = name(node.child)
+            r, child = node.lever.ratio, name(node.child)
             text = f"{node.lever.name}[{child}]"
             reason = (f"lever {node.lever.name} (line {node.lever.line}), r = {r:.6g}: "
                       f"K = K({child}) / r² = K({child}) / {r * r:.6g}; behind it a mass m "

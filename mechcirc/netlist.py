@@ -185,8 +185,7 @@ class _Line:
             return [_Token(m.group(), m.start() + 1) for m in _WORD.finditer(text, 0, end)]
         tokens: list[_Token] = []
         end = len(text)         # where a comment starts (not in braces), or the line's end
-        start = None
-        brace = None
+        start, brace = None, None
         for i, c in enumerate(text):
             if brace is None and c in "#;":
                 end = i
@@ -318,6 +317,7 @@ class _Parser:
         self.levers: list[Lever] = []
         self.drives: list[Drive] = []
         self.drive_rotational: bool | None = None
+        self.drive_unit: str = ""           # (the text of the drive's unit, where it has one)
         self.names: dict[str, int] = {}
         #: Parsed expressions and unit factors, for symbolic formulas:
         #: ``("param", name)`` / ``(element, "value" | "eta")`` -> (Expr, factor); the fast
@@ -483,6 +483,9 @@ class _Parser:
             if rot is None:     # rotary when its nodes carry rotary units only
                 kinds = [self.node_kinds.get(n, {}) for n in (drive.n1, drive.n2)]
                 rot = any(True in k for k in kinds) and not any(False in k for k in kinds)
+            else:               # its own unit: its nodes' elements must agree
+                self._note_kind(drive.line, drive.name, rot, self.drive_unit, drive.col,
+                                (drive.n1, drive.n2))
             # (the parser's own new Drive, not yet seen by anyone: set, not replaced)
             object.__setattr__(drive, "rotational", rot)
         elements, levers, params = tuple(self.elements), tuple(self.levers), dict(self.params)
@@ -569,8 +572,7 @@ class _Parser:
                 units[previous] = tok
                 previous = None
                 continue
-            previous = None
-            head = tok.text.split("=", 1)[0]
+            previous, head = None, tok.text.split("=", 1)[0]
             if "=" in tok.text and is_name(head):
                 if head not in allowed:
                     line.error(f"unknown option {head!r} for {keyword}"
@@ -660,7 +662,7 @@ class _Parser:
             if eta_text is not None:
                 expressions[(name, "eta")] = eta
             if u is not None:
-                self._note_kind(lineno, name, u, unit, m.start(7) + 1, (n1, n2))
+                self._note_kind(lineno, name, is_rotational(u), unit, m.start(7) + 1, (n1, n2))
             append(make(kind, name, n1, n2, value, eta, lineno, len(indent) + 1))
 
     def fast_drive(self, lineno: int, m: re.Match[str]) -> None:
@@ -684,8 +686,8 @@ class _Parser:
                             (name, "value"), unit=" " + ELEMENT_UNITS[kind])
         if "value" in units:
             unit_tok = units["value"]
-            self._note_kind(line.lineno, name, _unit(unit_tok.text), unit_tok.text,
-                            unit_tok.col, (n1, n2))
+            self._note_kind(line.lineno, name, is_rotational(_unit(unit_tok.text)),
+                            unit_tok.text, unit_tok.col, (n1, n2))
         eta = self._value(line, opts["eta"], f"eta of {name!r}", units.get("eta"), "eta",
                           (name, "eta")) if "eta" in opts else 1.0
         spring = {"backlash": 0.0, "damping": 0.0}
@@ -713,8 +715,7 @@ class _Parser:
 
     def ic(self, line: _Line, kind: str):
         pos, opts, units = self._fields(line, kind, 1, ("x", "v"))
-        node = self._name(line, pos[0], "node name")
-        values = {}
+        node, values = self._name(line, pos[0], "node name"), {}
         for key, role in (("x", "displacement"), ("v", "velocity")):
             if key in opts:
                 values[key] = self.with_unit(line, self.expr(line, opts[key]), units.get(key), role)
@@ -724,10 +725,10 @@ class _Parser:
         self.initial.append((node, values.get("x", 0.0), values.get("v", 0.0), line.lineno,
                              pos[0].col))
 
-    def _note_kind(self, lineno: int, name: str, unit, unit_text: str, col: int,
+    def _note_kind(self, lineno: int, name: str, rot: bool | None, unit_text: str, col: int,
                    nodes) -> None:
-        """Warn once per node that carries both translational and rotational units."""
-        rot = is_rotational(unit)
+        """Warn once per node that carries both translational and rotational units (``rot``:
+        whether ``name``'s unit is rotational, None for neither)."""
         if rot is None:
             return
         for node in nodes:
@@ -788,6 +789,7 @@ class _Parser:
         # rad/s or N·m: a rotary drive (no unit: decided by its nodes' elements, in build)
         self.drive_rotational = None if units.get(key) is None else \
             _unit(units[key].text).dim in ((0, 0, -1), (1, 2, -2))
+        self.drive_unit = "" if units.get(key) is None else units[key].text
         self.drives.append(Drive(name, n1, n2, key, amplitude, line.lineno,
                                  line.tokens[0].col))
 
@@ -823,7 +825,7 @@ class _Parser:
                 line.error(f"a motion table's displacements are read as they are, in SI; "
                            f"{unit.text!r} would scale them", unit.col,
                            "m (a translational drive) or rad (a rotary drive)")
-            self.drive_rotational = _unit(unit.text).dim == (0, 0, 0)
+            self.drive_rotational, self.drive_unit = _unit(unit.text).dim == (0, 0, 0), unit.text
         return read_motion_table(path, spec=f"motion={path}")
 
     def _motion_law(self, line: _Line, opts: dict, units: dict, tok):
@@ -848,6 +850,7 @@ class _Parser:
                 v = self.with_unit(line, v, units.get(key), "displacement")
                 if key in units:    # an angle: a rotary drive (a length: translational)
                     self.drive_rotational = _unit(units[key].text).dim == (0, 0, 0)
+                    self.drive_unit = units[key].text
             elif key in units:
                 v = math.degrees(self.with_unit(line, v, units[key], "angle"))
             values[key] = v

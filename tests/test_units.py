@@ -191,6 +191,25 @@ def test_mixed_translational_and_rotational_units_on_a_node_warn():
                        "drive V a 0 velocity=1\n")
 
 
+@pytest.mark.parametrize("text,match", [
+    ("drive W a 0 velocity=0.1 m/s\nmass J a 0 0.1 kg*m^2\n", "'m/s' of 'W'.*'kg\\*m\\^2'"),
+    ("drive W a 0 force=2 N*m\nmass m a 0 3 kg\n", "'N\\*m' of 'W'.*'kg'"),
+    ("drive W a 0 motion=harmonic rise=180 return=180 stroke=20 deg\nmass m a 0 3 kg\n",
+     "'deg' of 'W'.*'kg'"),
+])
+def test_a_drive_unit_against_its_nodes_elements_warns(text, match):
+    """The drive's own unit counts: a translational drive on an inertia, or a rotary one on
+    a mass, was relabelled silently (the inertia listed in kg, the mass in kg·m²)."""
+    with pytest.warns(mechcirc.errors.UnitMixWarning, match=match):
+        mechcirc.parse(text)
+
+
+def test_a_drive_unit_that_agrees_does_not_warn(recwarn):
+    mechcirc.parse("drive W a 0 velocity=2 rad/s\nmass J a 0 0.1 kg*m^2\n")
+    mechcirc.parse("drive V a 0 force=2 N\nmass m a 0 3 kg\n")
+    assert not [w for w in recwarn.list if w.category is mechcirc.errors.UnitMixWarning]
+
+
 def test_separate_nodes_do_not_warn(recwarn):
     mechcirc.parse("mass m a 0 2 kg\nspring k a b 5 N/m\nmass J c 0 0.1 kg*m^2\n"
                    "spring kt c b 3 N*m/rad\ndrive V a 0 velocity=1\n")
