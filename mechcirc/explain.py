@@ -32,8 +32,7 @@ class Step:
 
 def _leaf_formula(e) -> str:
     """K = (jω)^p / (value·η) of :data:`mechcirc.circuit.LAWS`, written for people."""
-    s = f"{e.value * e.eta:.6g}"
-    power = LAWS[e.kind].power
+    s, power = f"{e.value * e.eta:.6g}", LAWS[e.kind].power
     if power == 0:
         return f"K = 1/{s}"
     if power == 1:

@@ -43,7 +43,7 @@ from typing import Any, Mapping, NamedTuple, NoReturn, cast
 from pathlib import Path
 
 from .circuit import ELEMENT_UNITS, Circuit, Drive, Element, ElementKind, Lever
-from .errors import NetlistError, UnitMixWarning
+from .errors import NetlistError, UnitMixWarning, clip
 from .expressions import CONSTANTS, FUNCTIONS, Expr, evaluate, parse_expression
 from .sources import did_you_mean, is_name, is_number, read_source, split_lines
 from .units import (UnitError, convert, is_rotational, looks_like_unit, parse_unit,
@@ -1005,5 +1005,9 @@ def load(path: str | os.PathLike, *, params: Mapping[str, float] | None = None,
         If the file is missing, unreadable, not UTF-8, or has an error.
     """
     source = os.fspath(path)
+    if source.lower().endswith(".toml"):        # a scene, linkage or study file
+        raise NetlistError("a TOML file (a scene, linkage or study), not a netlist", source,
+                           expected="a .mcir netlist; a scene's circuit at a crank angle: "
+                           f"mechcirc scene {clip(source, 60)} --theta DEG -o FILE.mcir")
     text = read_source(path, "a .mcir netlist")
     return parse(text, source=source, params=params, require_drive=require_drive)

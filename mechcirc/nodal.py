@@ -201,8 +201,7 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
     otherwise.  The double-double LU's retry serves real and complex ω alike; the pattern, the solver and the residual's plan come from :func:`pattern` and
     :func:`solver`; the compiled kernels serve the sparse path at real ω (:func:`kernels`).
     """
-    pat = pattern(system)
-    rhs = system.injection()
+    pat, rhs = pattern(system), system.injection()
     solve_with = solver(system)
     at = np.arange(omega.size) if at is None else at
     kern = None if solve_with.kind == "dense" or np.iscomplexobj(omega) \
@@ -433,8 +432,7 @@ def _backward_error(system, omega: float, x: NDArray) -> float:
     all four together), a lever stamp as |value·x_c|.  A x from the
     residual in double-double.
     """
-    pat = pattern(system)
-    rhs = system.injection()
+    pat, rhs = pattern(system), system.injection()
     with np.errstate(all="ignore"):
         ax = rhs - pat.residual(np.array([omega]), x[None, :], None, rhs,
                                 kernels(system.size))[0]      # (the same bits either way)
@@ -642,8 +640,7 @@ def _singular_points(system, omega, x, K, err, singular, steps):
     marks both as singular (flag 1).  ``x`` gives the solution's row at
     each singular point (an array, or a dict of rows).
     """
-    K = K.copy()
-    err = err.copy()
+    K, err = K.copy(), err.copy()
     for i in np.flatnonzero(singular):
         xi = x.get(i) if isinstance(x, dict) else x[i]
         Ki = K[i]

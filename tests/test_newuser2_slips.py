@@ -4,6 +4,7 @@
 import json
 import math
 import warnings
+from pathlib import Path
 
 import pytest
 from cli_helpers import assert_user_error, run
@@ -12,6 +13,8 @@ import mechcirc
 from mechcirc.errors import MechcircError
 from mechcirc.study import parse_spec
 from mechcirc.transient import transient
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 ROTARY = """# rotary drive with a clearance
 drive W p 0 velocity=2 rad/s
@@ -64,6 +67,19 @@ def test_a_spice_deck_is_told_what_else_to_change_at_its_first_error(tmp_path, c
     plain.write_text("RC filter title\n")
     err = assert_user_error(["check", plain], capsys, "not a netlist")
     assert "SPICE" not in err
+
+
+@pytest.mark.parametrize("command", [["check"], ["sweep", "--omega-min", "1", "--omega-max", "10"],
+                                     ["resonances"], ["forces", "--omega", "10"],
+                                     ["transient", "--t-end", "1"]])
+def test_a_scene_file_given_to_a_netlist_command_is_named_as_such(command, capsys):
+    """A scene (TOML) to a netlist command stopped at its first 'key = value' with "spaces
+    around '='", as if it were a netlist with a typo: it is named a TOML file now, with the
+    command that turns a scene into a netlist."""
+    scene = EXAMPLES / "heald_scene.toml"
+    assert_user_error([command[0], scene, *command[1:]], capsys,
+                      "heald_scene.toml: error: a TOML file", "not a netlist",
+                      "mechcirc scene ", "--theta DEG -o FILE.mcir")
 
 
 def test_an_unknown_range_key_is_named():
