@@ -750,16 +750,17 @@ def root_brackets(omega, omega_d, zeta) -> tuple[NDArray, NDArray]:
 def _peak_band(result, omega_min, omega_max) -> tuple:
     """``(circuit, sweep or None, lo, hi)`` of :func:`peak`'s arguments, checked."""
     if isinstance(result, Sweep):
-        circuit, grid = result.circuit, result
-        lo = float(result.omega.min()) if omega_min is None else float(omega_min)
-        hi = float(result.omega.max()) if omega_max is None else float(omega_max)
+        circuit, grid, w = result.circuit, result, result.omega if result.omega.size else [math.nan]
+        lo = float(np.min(w)) if omega_min is None else float(omega_min)
+        hi = float(np.max(w)) if omega_max is None else float(omega_max)
     else:
         circuit, grid = result, None
         if omega_min is None or omega_max is None:
             raise ValueError("peak(circuit, ...) needs omega_min and omega_max")
         lo, hi = float(omega_min), float(omega_max)
     if not 0 <= lo < hi < math.inf:
-        raise ValueError(f"need 0 <= omega_min < omega_max < inf, got {lo} and {hi}")
+        raise ValueError(f"need 0 <= omega_min < omega_max < inf (a band: a sweep of two ω "
+                         f"or more), got {lo} and {hi}")
     return circuit, grid, lo, hi
 
 

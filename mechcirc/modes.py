@@ -204,8 +204,7 @@ def modes(circuit: Circuit, omega_max: float | None = None) -> Modes:
     els = system.elements
     ei, ej, y, power, lever_ends, names = _stamped(system)
     kinds = np.array([e.kind for e in els])
-    damper = kinds == "damper"
-    el_names = [e.name for e in els]
+    damper, el_names = kinds == "damper", [e.name for e in els]
     shared = {"nodes": list(system.nodes), "elements": el_names, "all": names,
               "stored": [n for n, d in zip(el_names, damper) if not d],
               "dampers": [n for n, d in zip(el_names, damper) if d], "law": (y, power),

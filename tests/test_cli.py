@@ -70,9 +70,11 @@ def test_help_lists_the_commands(capsys):
 
 
 def test_no_command_prints_help_and_exits_2(capsys):
-    status, out, _ = run([], capsys)
-    assert status == 2
-    assert "usage: mechcirc" in out
+    """A usage error: the help on stderr, nothing on stdout (it was on stdout, against the
+    contract of exit status 2)."""
+    status, out, err = run([], capsys)
+    assert status == 2 and out == ""
+    assert "usage: mechcirc" in err
 
 
 def test_python_m_mechcirc_help():

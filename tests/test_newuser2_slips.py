@@ -82,6 +82,20 @@ def test_a_scene_file_given_to_a_netlist_command_is_named_as_such(command, capsy
                       "mechcirc scene ", "--theta DEG -o FILE.mcir")
 
 
+def test_the_peak_of_an_empty_sweep_is_a_clear_error():
+    """c.sweep([]).peak() raised numpy's 'zero-size array to reduction operation'; the cam
+    command said 'a oscillating follower'."""
+    c = mechcirc.parse("drive V a 0 velocity=0.1\nmass m a 0 2\nspring k a 0 800\n")
+    with pytest.raises(ValueError, match="a band: a sweep of two ω or more"):
+        c.sweep([]).peak()
+
+
+def test_an_oscillating_follower_without_a_roller_radius(capsys):
+    assert_user_error(["cam", "--law", "cycloidal", "--follower", "oscillating",
+                       "--base-radius", "40", "--rise", "120", "--stroke", "20"], capsys,
+                      "an oscillating follower needs --roller-radius")
+
+
 def test_an_unknown_range_key_is_named():
     spec = {"netlist": "netlists/stb_heald.mcir", "omega": {"min": 10, "max": 1e3, "points": 5},
             "sample": {"n": 3, "params": {"eta1": {"min": 1, "maximum": 2}}}}

@@ -239,8 +239,8 @@ def main(argv: list[str] | None = None) -> int:
             if isinstance(parser, _Parser):
                 parser.given = command
             args = parser.parse_args(argv)
-        if not getattr(args, "func", None):
-            parser.print_help()
+        if not getattr(args, "func", None):     # no command: the help, as a usage error
+            parser.print_help(sys.stderr)
             return 2
         with sigterm_unwinds():
             return run_handler(args)

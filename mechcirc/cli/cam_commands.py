@@ -147,7 +147,8 @@ def _check_args(args) -> None:
     if args.svg and not args.svg.lower().endswith(".svg"):
         raise InputError(f"--svg {args.svg}: the drawing is SVG; give a file ending in .svg")
     if args.follower not in ("flat", "oscillating_flat") and args.roller_radius is None:
-        raise InputError(f"a {args.follower} follower needs --roller-radius (0 for a knife edge)")
+        raise InputError(f"{'an' if args.follower[0] in 'aeiou' else 'a'} {args.follower} "
+                         "follower needs --roller-radius (0 for a knife edge)")
     if args.follower == "oscillating" and (args.arm is None or args.pivot is None):
         raise InputError("an oscillating follower needs --arm and --pivot")
     if args.follower == "oscillating_flat" and args.pivot is None:

@@ -137,8 +137,7 @@ def resonance_check(params: SleyParameters, theta0: float, *,
     circuit = to_circuit(params, theta0, damping=damping)
     text = to_netlist(params, theta0, damping=damping)
     found, how = circuit_resonances(circuit, 4.0 * max(eigen))
-    wn = tuple(w for w, _ in found)
-    wd = tuple(w for _, w in found)
+    wn, wd = tuple(w for w, _ in found), tuple(w for _, w in found)
     rel = math.inf if len(found) != len(eigen) else \
         max(abs(a - b) / b for a, b in zip(wn + wd, eigen + eigen_d))
     return ResonanceCheck(float(theta0), damping, eigen, eigen_d, wn, wd, rel, how, text)
