@@ -372,8 +372,7 @@ def _solve(circuit, motion, amp, Omega, tol, harmonics, method,
             i = pending[j]
             N[i], error[i], table_error[i] = n[j], e[j], from_table[j]
             rows[i] = (V[j, :n[j]], Qk[j, :n[j]], sw, j * kmax)
-        pending = pending[~done]
-        kmax = min(4 * kmax, max_harmonics)
+        pending, kmax = pending[~done], min(4 * kmax, max_harmonics)
     width = int(N.max())
     Vs, Qs = np.zeros((S, width), dtype=complex), np.zeros((S, width), dtype=complex)
     Ks = np.full((S, width), complex(math.inf, 0.0))

@@ -126,7 +126,7 @@ def _one_speed(args, circuit, elements, motion) -> int:
     print(f"{args.file}: drive {d.name} {(motion or d.motion).spec} at {r.rpm:g} rpm "
           f"(Ω = {in_unit(r.omega_shaft, fu):.6g} {fu})")
     print(f"  {r.harmonics} harmonics; estimated error {r.error:.2g} of the peak "
-          f"(asked {r.tol:g})")
+          f"(asked {r.tol:g}); forces about their mean (no static preload)")
     print("  peak |Q| = inf: the steady periodic force is unbounded" if r.unbounded else
           f"  peak |Q| = {r.peak:.7g} {unit} at θ = {r.peak_angle_deg:.4f} deg; "
           f"drive velocity up to {np.max(np.abs(r.v)):.4g} {vu}")
