@@ -95,8 +95,7 @@ class CycleMap:
         ``theta_deg`` (linear interpolation between the bracketing grid
         points, wrapping over the revolution) and ``omega`` [rad/s].
         """
-        W = self.natural_frequencies()
-        out = []
+        W, out = self.natural_frequencies(), []
         n = len(self.theta)
         for k in range(W.shape[1]):
             for h in self.harmonics:
@@ -273,8 +272,7 @@ def _cycle_designs(scene: Scene, motion, reflect: ReflectMode):
 
     Returns ``((Designs, angle indices), angles for build)``.
     """
-    every = range(len(motion.theta))
-    lk = scene.linkage
+    every, lk = range(len(motion.theta)), scene.linkage
     if reflect != "eta" or any(s.guide != "ground" for s in lk.sliders) or \
             not set(lk.ground) <= set(motion.point_names):
         return None, every

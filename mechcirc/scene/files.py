@@ -387,8 +387,7 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     elastic = r.elastic()
     elastic_links = {x.link for x in elastic}
     torsions = r.torsions(elastic_links)
-    gears = r.gears(torsions)
-    links = linkage.links
+    gears, links = r.gears(torsions), linkage.links
     bodies = {l for l in links if l not in elastic_links} | {t.body for t in torsions}
     rigid_points = set().union(*(set(links[l]) for l in links if l not in elastic_links))
     masses = r.masses(bodies, rigid_points, elastic_links)
@@ -794,8 +793,7 @@ def _analysis(text, source, table, circuit_names) -> Analysis:
 
 def _parts(scene: Scene) -> tuple:
     """Rigid parts after releasing the elastic elements; checks each has one DOF."""
-    lk = scene.linkage
-    bodies = scene.bodies
+    lk, bodies = scene.linkage, scene.bodies
     tbodies = {t.body for t in scene.torsions}
     meshes = gear_meshes(scene)
     parts = _rigid_parts(lk, bodies, tbodies, meshes)

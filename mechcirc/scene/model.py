@@ -204,8 +204,7 @@ def _perp(v):
 
 def _motion(scene: Scene, theta: float, state) -> _Motion:
     """Solve the rigid linkage at θ (unless ``state`` is given) and scale it."""
-    lk = scene.linkage
-    deg = math.degrees(theta)
+    lk, deg = scene.linkage, math.degrees(theta)
     if state is None:
         try:
             state = lk.solve(theta)
@@ -450,8 +449,7 @@ def _check_part(scene, part, m: _Motion):
 
 def part_speeds(scene: Scene, part, m: _Motion) -> dict:
     """A rigid part's velocity ratios to the crank: name → (size as a speed, value)."""
-    bodies = scene.bodies
-    tbodies = {t.body for t in scene.torsions}
+    bodies, tbodies = scene.bodies, {t.body for t in scene.torsions}
     sizes = {f"ω_{b}/ω_{m.crank}": (np.abs(m.ang[b]) * m.Lc, m.ang[b]) for b in part}
     sizes.update((f"|v_{p}|/ω_{m.crank}", (_norm(m.vel[p]),) * 2)
                  for b in part if b not in tbodies for p in bodies[b])

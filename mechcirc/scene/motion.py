@@ -388,8 +388,7 @@ def _linkage_part(scene, B, h, i, part, tables, tlink):
     margin (a geared crank's part: over a turn); ``h`` the tables' step in θ."""
     ang, ang1, ang2 = tables[:3]
     tbodies = set(tlink)
-    lk = scene.linkage
-    L = scene.length_scale
+    lk, L = scene.linkage, scene.length_scale
     cb = next((b for b in part if b not in tbodies
                and any(p in lk.ground for p in scene.bodies[b])), None)
     if cb is None:
@@ -442,8 +441,7 @@ def _linkage_part(scene, B, h, i, part, tables, tlink):
 def _elements(scene, prig, point_fns, angle_fn, part_of):
     """The elastic elements' kernel rows: EI = [type, law, fa, fa2, fb, fb2, part_a, part_b],
     EF = [k, d, clearance, l0, xa, ya, xb, yb, ux, uy] (see the kernel module), names."""
-    lk = scene.linkage
-    L = scene.length_scale
+    lk, L = scene.linkage, scene.length_scale
     EI, EF, enames = [], [], []
 
     def law_of(el):

@@ -118,8 +118,7 @@ def plot_mode(scene, theta: float, n: int = 1, *, kind: str = "resonance", ax=No
 def _draw_displaced(ax, scene, state, moves):
     """The linkage in ``state`` (grey) and its points displaced by ``moves`` (point →
     displacement [linkage units]), elastic links dashed; the ground points as triangles."""
-    lk = scene.linkage
-    elastic = {e.link for e in scene.elastic}
+    lk, elastic = scene.linkage, {e.link for e in scene.elastic}
     for link, pts in lk.links.items():
         ring = list(pts) + ([pts[0]] if len(pts) > 2 else [])
         rigid = np.array([state.points[p] for p in ring])

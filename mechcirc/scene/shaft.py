@@ -203,8 +203,7 @@ def rigid_model(scene: Scene, N: int = 1024):
     """
     (ang, ang1, ang2, pos, vel, acc), _ = body_tables(scene, N)
     cyc, nodes = scene.cycle, N * scene.cycle_revolutions
-    h = cyc / nodes
-    B = Builder(nodes, cyc)
+    h, B = cyc / nodes, Builder(nodes, cyc)
     B.line(-1, 0.0, 1.0)                        # the drive's part: θ itself
 
     def table(f, f1, f2, turns=False):

@@ -26,8 +26,7 @@ def plot_result(result, fig=None):
     from ..plotting import new_panels
 
     fig, axes = new_panels(fig, 3, caller="plot_result", figsize=(8, 9), sharex=True)
-    axes = axes[:, 0]
-    deg = np.degrees(result.crank_angle)
+    axes, deg = axes[:, 0], np.degrees(result.crank_angle)
     # the cranks' panels: crank 2P, and crank 5P when there is one (both sides)
     for ax, ylabel, curves in (
             (axes[0], "crank acceleration [rad/s²]",
