@@ -301,8 +301,7 @@ def cmd_frame(args) -> int:
     res = frame_loading(fb, theta, omega, reed_force=reed,
                         reed_point=tuple(x * k for x in args.reed_point),
                         gravity=(0.0, -9.81) if args.gravity else (0.0, 0.0), **links)
-    cols = res.columns()
-    summary = res.summary()
+    cols, summary = res.columns(), res.summary()
     from ..kinematics.plots import plot_shaking
 
     write_outputs(args, cols.items(), lambda: plot_shaking(res),

@@ -214,8 +214,7 @@ def link_kinematics(fourbar: FourBar, theta: ArrayLike, omega: float, crank: Lin
     w2, w3, w4 = np.full(n, float(omega)), st.mu3 * omega, st.mu * omega
     al2, al3, al4 = np.zeros(n), st.nu3 * omega ** 2, st.nu * omega ** 2
     crank_turn = (theta, w2, al2)                     # each link's angle, rate, acceleration
-    coupler_turn = (st.phi3, w3, al3)
-    rocker_turn = (st.phi4, w4, al4)
+    coupler_turn, rocker_turn = (st.phi3, w3, al3), (st.phi4, w4, al4)
 
     def point(origin, turn, s):
         return rigid_points(origin, turn[1:], np.exp(1j * turn[0]) * s)

@@ -160,8 +160,7 @@ def _next_group(joints, known, remaining):
     ``known`` bodies), as (links, inner pairs, outer pairs); None if there is none."""
     for size in range(2, len(remaining) + 1, 2):
         for combo in itertools.combinations(remaining, size):
-            S = set(combo)
-            pairs = 0
+            S, pairs = set(combo), 0
             outer_pairs: list[str] = []
             inner_pairs: list[str] = []
             for p, members in joints.items():

@@ -300,8 +300,7 @@ def plan(lk) -> _Plan:
         Dyads, or Newton's method when the structure has no dyad order.
     """
     idx = lk.link_index()
-    nb = len(idx)
-    local = lk.local_offsets()
+    nb, local = len(idx), lk.local_offsets()
     points = tuple(lk.pose)
     crank_idx = np.array([idx[c.link] for c in lk.cranks])
     omega = np.array([c.omega for c in lk.cranks], dtype=float)
@@ -370,8 +369,7 @@ def _dyads(lk, idx):
         groups = lk.assur_groups()
     except GeometryError:
         return None
-    pairs = lk.pairs()
-    slides = {s.pair: s for s in lk.sliders}
+    pairs, slides = lk.pairs(), {s.pair: s for s in lk.sliders}
     known = {"ground"} | {c.link for c in lk.cranks}
     out = []
     for g in groups:
@@ -1098,8 +1096,7 @@ class Newton:
 
     def gamma(self, q, qdot, sides=None):
         Ra, _, Rb, _ = sides if sides is not None else self._sides(q)
-        pl = self.pl
-        N = len(q)
+        pl, N = self.pl, len(q)
         w2, g = _with_ground(qdot[:, 2::3] ** 2), np.zeros((N, self.n))
         g[:, :2 * self.m] = np.ascontiguousarray(Ra * w2[:, pl.ia] - Rb * w2[:, pl.ib]).view(
             np.float64)
@@ -1117,8 +1114,7 @@ class Newton:
 
     def derivatives(self, q):
         """(J, q̇, q̈, parts) batched; NaN rows where J is singular."""
-        pl = self.pl
-        N = len(q)
+        pl, N = self.pl, len(q)
         sides = self._sides(q)
         J = self.jacobian(q, sides)
         nc = len(pl.crank_idx)
@@ -1341,8 +1337,7 @@ def _steps_to(lk, nw, q, qdot, qddot, t_now, t_target, sign, dt_max):
     """Single Newton steps of at most ``dt_max`` from the node (q, q̇, q̈) at ``t_now`` to
     ``t_target``, each from a Taylor predictor, halved until it assembles; the node there
     and ``t_target``.  Raises where the linkage locks or changes branch (``sign`` of det J)."""
-    pl = nw.pl
-    w1 = lk.cranks[0].omega
+    pl, w1 = nw.pl, lk.cranks[0].omega
     wmax = float(np.max(np.abs(pl.omega)))
     while t_now != t_target:
         dt = max(-dt_max, min(dt_max, t_target - t_now))
@@ -1363,8 +1358,7 @@ def _steps_to(lk, nw, q, qdot, qddot, t_now, t_target, sign, dt_max):
 
 def _targets(lk, nw, t, nodes, keep, at, kept, sign, dt_max):
     """Every target from the kept nodes around it; see the comment below."""
-    pl = nw.pl
-    w1 = lk.cranks[0].omega
+    pl, w1 = nw.pl, lk.cranks[0].omega
     Qk, Qdk, Qddk, Pk, exact = kept
     # Every target lies between two kept nodes (or is one): quintic Hermite
     # interpolation from their q, q̇, q̈ (error ~ h⁶ q⁽⁶⁾/720, about 1e-12 of

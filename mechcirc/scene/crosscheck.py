@@ -203,8 +203,7 @@ def _ringing_rows(found, dev, dt, n) -> list:
 def _forced_rows(built, found, model, kern, theta, free, h) -> list:
     """|Q0| of the circuit against the forced response of the time domain, judged, at
     0.5 and 0.9 × the lowest resonance, between resonances and 1.5 × the highest."""
-    circuit = built.circuit
-    ws = sorted(r.omega for r in found)
+    circuit, ws = built.circuit, sorted(r.omega for r in found)
     probe = [0.5 * ws[0], 0.9 * ws[0], *(math.sqrt(a * b) for a, b in zip(ws, ws[1:])),
              1.5 * ws[-1]]
     sw, rows = circuit.sweep(np.array(probe)), []

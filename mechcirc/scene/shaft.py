@@ -313,8 +313,7 @@ class _ElasticShaft:
         """Every slider with a ``stroke`` checked at every sample of the cycle (crank rotations
         ``th``, free parts' states ``z``) by the linkage's ``check_stroke``, as the
         constant-speed simulation does: its located error where a point is past its stroke."""
-        m = self.model
-        coord = {0: self.c * th, **{i + 1: z[:, i] for i in range(self.n)}}
+        m, coord = self.model, {0: self.c * th, **{i + 1: z[:, i] for i in range(self.n)}}
         stroked = [sl for sl in m.scene.linkage.sliders if sl.stroke]
         positions = {p: [self._function(f, coord[i])[:, 0] for f in (fx, fy)]
                      for p, (fx, fy, i) in m.point_fn.items()

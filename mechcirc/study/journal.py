@@ -132,8 +132,7 @@ def curve_writer(path, spec: StudySpec):
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    omega = omega_grid(spec)
-    record = provenance(spec)
+    omega, record = omega_grid(spec), provenance(spec)
     k_unit = record["units"]["K_abs_min"]
     record["curves"] = ("long format: one row per design and omega; design is the "
                         "table's index; K = K_re + j K_im")

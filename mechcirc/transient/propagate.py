@@ -55,27 +55,40 @@ def step_maps(A: np.ndarray, B: np.ndarray, h: float):
     return [np.linalg.matrix_power(la.expm(big / k), k) for k in (1, 3, 5)], s
 
 
-def map_error(A: np.ndarray, B: np.ndarray, h: float) -> float:
+def map_error(A: np.ndarray, B: np.ndarray, h: float, found=False) -> float:
     """The relative error per step of the one-step map (Φ, Γ₁, Γ₂) (:func:`discretise`),
-    at least :data:`ROUNDING_PER_STEP`.
+    at least :data:`ROUNDING_PER_STEP`: the largest of :func:`map_errors` over the map's
+    largest entry.
 
     ``expm`` scales A·h by 2⁻ˢ and squares s times, and every squaring doubles the error
     of every part of the result: beside a stiff mode (‖A h‖ large) the slow modes a run
     carries from step to step are off by much more than the unit roundoff (9e-9 of the
-    map's largest entry where ‖A h‖₁ = 9e8, against a 40-digit exponential).  Where
-    ‖A h‖₁ > :data:`MAP_CHECK_NORM` the map is computed again as the third and the fifth
-    power of the map of h/3 and h/5 (:func:`step_maps`: other scalings, other
-    roundings): three times their larger difference from it.  On seven stiff cases
-    against mpmath that was 1.2 … 33 × the true error of the map.
+    map's largest entry where ‖A h‖₁ = 9e8, against a 40-digit exponential).  On seven
+    stiff cases against mpmath this was 1.2 … 33 × the true error of the map.
     """
-    found = step_maps(A, B, h)
+    found = map_errors(A, B, h) if found is False else found     # (or given: map_errors')
     if found is None:
         return ROUNDING_PER_STEP
+    errors, largest = found
+    return max(ROUNDING_PER_STEP, float(errors.max()) / max(largest, 1e-300))
+
+
+def map_errors(A: np.ndarray, B: np.ndarray, h: float):
+    """The error of each entry of the augmented one-step map, and its largest entry, or None
+    where ‖A h‖₁ ≤ :data:`MAP_CHECK_NORM` (no squaring: rounding only).
+
+    The map is computed again as the third and the fifth power of the map of h/3 and h/5
+    (:func:`step_maps`: other scalings, other roundings), each entry's error taken as
+    three times its larger difference from it.  (A lever network stepped at 68 s: the
+    map's small entries were 1e-8 off of themselves where its largest was 1e-11 off;
+    these errors times the states' magnitudes were 0.8 … 5.3 × the true ones.)"""
+    found = step_maps(A, B, h)
+    if found is None:
+        return None
     (whole, *others), s = found
     scale = s[:, None] / s[None, :]          # (the differences as the run's map has them)
     diff = np.maximum(*(np.abs(P - whole) for P in others)) * scale
-    return max(ROUNDING_PER_STEP, 3 * float(diff.max())
-               / max(float(np.abs(whole * scale).max()), 1e-300))
+    return 3 * diff, float(np.abs(whole * scale).max())
 
 
 def drive_gain(ss: StateSpace, h: float, nt: int) -> float:
@@ -126,7 +139,7 @@ def propagate_linear(ss: StateSpace, z0, u_in, h, elements, velocities):
     of x left out with the rounding-level imaginary parts of real shapes (x only).
     The first bounds what the steps' own errors grow to in any x (None where not
     finite): on the modal path each mode's (:func:`modal_plan`), on the block path the
-    one-step map's (:func:`map_error`) through :func:`error_growth`.
+    one-step map's (:func:`map_errors`, entry by entry) through :func:`error_growth`.
     """
     x_only, dmap = velocities is False and not elements, drive_map(ss)
     w = None if dmap is None else dmap[0]
@@ -143,9 +156,16 @@ def propagate_linear(ss: StateSpace, z0, u_in, h, elements, velocities):
         maps = discretise(ss.A, ss.B, h)
         Z = propagate_blocks(ss.A, ss.B, z0, u_in, h, maps=maps)
         known = ss.memo("_map_errors", dict)    # (by step: a repeated run computes none)
-        per_step = known[h] if h in known else known.setdefault(h, map_error(ss.A, ss.B, h))
-        growth = error_growth(maps[0], ss.Cx, Z)
-        x_err = None if growth is None else per_step * (u_in.size - 1) * growth
+        found = known[h] if h in known else known.setdefault(h, map_errors(ss.A, ss.B, h))
+        # Each step's error of z: the map's, entry by entry and relative to its largest
+        # (a slow mode beside a stiff one: the entries' spread 18 × short, seed 2 net 188),
+        # times the states' largest magnitudes w, and rounding.
+        w, eta = np.abs(Z).max(axis=0, initial=0.0), map_error(ss.A, ss.B, h, found)
+        step = eta * (np.abs(maps[0]) @ w)
+        if found is not None:
+            step += found[0][:w.size, :w.size] @ w
+        growth = error_growth(maps[0], ss.Cx, step, u_in.size)
+        x_err = None if growth is None else (u_in.size - 1) * growth
         path = (f"block propagation (exact; the modal path needs independent mode shapes and "
                 f"is not used here: {why})")
     err = 0.0
@@ -156,30 +176,28 @@ def propagate_linear(ss: StateSpace, z0, u_in, h, elements, velocities):
     return Z, T, nx, drive_y, x_ready, v_ready, x_err, err, path
 
 
-def error_growth(Phi: np.ndarray, Cx: np.ndarray, Z: np.ndarray) -> float | None:
-    """What a relative error of one step grows to in any x over the run: max over m of
-    max |Cx Φᵐ| (|Φ| w), w the states' largest magnitudes (``Z``'s columns), m = 0, the
-    powers of 2 below the number of steps and that number less one (None where not
-    finite).
+def error_growth(Phi: np.ndarray, Cx: np.ndarray, step: np.ndarray, nt: int) -> float | None:
+    """What an error ``step`` (a bound of each state's error) made at one step grows to in
+    any x: max over m of max |Cx Φᵐ| ``step``, m = 0, the powers of 2 below the number of
+    steps and that number less one (None where not finite).
 
-    A relative error η made at each step (the map's, rounding) gives x an error
-    Σₘ Cx Φᵐ δₖ ≤ η · steps · this.  It is about max|x| where Φᵐ stays bounded and
-    the states do not cancel in x; a rigid-body pair (Φᵐ grows like m) or nearly
-    parallel mode shapes make it larger (1.7e3 × max|x| on a random lever network
-    with two near-zero eigenvalue pairs, whose error was 1.8e3 × an estimate by
-    steps · max|x|: mpmath's propagation of the same model).
+    Made at each of the nt − 1 steps, they give x an error ≤ (nt − 1) × this.  It is
+    about one step's error in x where Φᵐ stays bounded and the states do not cancel in
+    x; a rigid-body pair (Φᵐ grows like m) or nearly parallel mode shapes make it
+    larger (1.7e3 × on a random lever network with two near-zero eigenvalue pairs,
+    whose error was 1.8e3 × an estimate by steps · max|x|: mpmath's propagation of the
+    same model).
     """
-    v = np.abs(Phi) @ np.abs(Z).max(axis=0, initial=0.0)
-    last = Z.shape[0] - 2               # (the steps less one: the largest m)
+    last = nt - 2                       # (the steps less one: the largest m)
     with np.errstate(all="ignore"):
-        found, P, R, m = float((np.abs(Cx) @ v).max(initial=0.0)), Phi, None, 1
+        found, P, R, m = float((np.abs(Cx) @ step).max(initial=0.0)), Phi, None, 1
         while m <= last and np.isfinite(found):
-            found = max(found, float((np.abs(Cx @ P) @ v).max(initial=0.0)))
+            found = max(found, float((np.abs(Cx @ P) @ step).max(initial=0.0)))
             if last & m:                # Φ^last from its binary digits
                 R = P if R is None else R @ P
             P, m = P @ P, 2 * m
         if R is not None:
-            found = max(found, float((np.abs(Cx @ R) @ v).max(initial=0.0)))
+            found = max(found, float((np.abs(Cx @ R) @ step).max(initial=0.0)))
     return found if np.isfinite(found) else None
 
 
@@ -405,10 +423,14 @@ def _modal_error(Sx, qmax, cre, cim, errors, nt: int) -> float | None:
     the modes' largest amplitudes and shapes (:func:`_x_bound`)."""
     rounding, coupling, conjugates, lam, h, dev_step, dev_once = errors
     T = (nt - 1) * h
-    with np.errstate(divide="ignore"):
-        gain = [np.minimum(T, 2 / np.abs(lam[:, None] - mu[None, :])) for mu in (lam, lam.conj())]
-    grown = _x_bound(Sx, (rounding + dev_step) * (nt - 1) * qmax
-                     + 2 * (coupling * gain[0] + conjugates * gain[1]) @ qmax, cre, cim)
+    if conjugates is None:          # (each eigenvalue's bound alone)
+        drift = T * coupling * qmax
+    else:
+        with np.errstate(divide="ignore"):
+            gain = [np.minimum(T, 2 / np.abs(lam[:, None] - mu[None, :]))
+                    for mu in (lam, lam.conj())]
+        drift = (coupling * gain[0] + conjugates * gain[1]) @ qmax
+    grown = _x_bound(Sx, (rounding + dev_step) * (nt - 1) * qmax + 2 * drift, cre, cim)
     once = _x_bound(Sx, qmax, cre, cim)
     return None if grown is None or once is None else grown + dev_once * once
 
@@ -510,8 +532,9 @@ def _mode_errors(A, lam, V, Vinv, h, cplx, dev) -> tuple:
     N, rounding = A.shape[0], h * eps * np.abs(lam) + ROUNDING_PER_STEP
     if N > RESIDUAL_MAX or not np.finfo(np.longdouble).eps < eps / 1000:
         kappa = np.linalg.norm(V, axis=0) * np.linalg.norm(Vinv, axis=1)
-        bound = np.diag(N * eps * float(np.abs(A).sum(axis=0).max()) * kappa)
-        return rounding, bound, 0 * bound, lam, h, dev, 0.0
+        # (the bounds alone: a diagonal, kept as its vector)
+        return rounding, N * eps * float(np.abs(A).sum(axis=0).max()) * kappa, None, lam, h, \
+            dev, 0.0
     Al = A.astype(np.longdouble)
     R = (Al @ V.real.astype(np.longdouble) + 1j * (Al @ V.imag.astype(np.longdouble))
          - V.astype(np.clongdouble) * lam.astype(np.clongdouble)).astype(complex)
