@@ -148,8 +148,7 @@ def _refine(omega, values, smooth, tol, budget, notes):
     # The midpoint of each interval (geometric mean) and its value, kept between
     # rounds: a round evaluates only the two new midpoints of each split interval.
     mid = np.sqrt(omega[:-1] * omega[1:])
-    mid_values = smooth(mid)
-    used = omega.size + mid.size
+    mid_values, used = smooth(mid), omega.size + mid.size
     while True:
         with np.errstate(all="ignore"):
             predicted = (values[:-1] + values[1:]) / 2          # log-log midpoint

@@ -99,8 +99,7 @@ def designs(netlist: "str | Circuit", params: dict | None = None, *,
 
     circuit, text = (netlist, None) if isinstance(netlist, Circuit) \
         else (_parsed(netlist, source), netlist)
-    exprs = expressions_of(circuit)
-    params = dict(params or {})
+    exprs, params = expressions_of(circuit), dict(params or {})
     if params and exprs is None:
         raise InputError("params= needs a circuit made by mechcirc.parse or mechcirc.load "
                          "(its .param expressions); this one was built in code")

@@ -591,8 +591,7 @@ def load_with_warnings(path):
             _ = circuit.tree    # reduce now, so topology errors and warnings surface here
         except NotSeriesParallelError:
             _ = circuit.nodal   # nodal analysis takes over; its own errors surface here
-    messages = [str(w.message) for w in caught]
-    x = units_of(circuit.drive)["x"]
+    messages, x = [str(w.message) for w in caught], units_of(circuit.drive)["x"]
     messages += [f"spring {e.name!r} has backlash={e.backlash:g} {x}: the frequency domain takes "
                  "its contact as closed (linearised); 'mechcirc transient' integrates the gap"
                  for e in circuit.elements if e.kind == "spring" and e.backlash >= 1e-10]

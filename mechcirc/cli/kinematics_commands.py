@@ -432,8 +432,7 @@ def cmd_linkage(args) -> int:
 
     check_output_paths(plots=(args.plot,), reads=(args.file,))
 
-    lk = _load_linkage(args.file)
-    theta = math.radians(args.theta)
+    lk, theta = _load_linkage(args.file), math.radians(args.theta)
     state = lk.solve(theta)
     if args.plot:
         from ..kinematics.plots import plot_linkage

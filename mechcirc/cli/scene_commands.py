@@ -201,8 +201,7 @@ def cmd_reduce(args) -> int:
     from .._simplify import parse_band, simplify
 
     check_output_paths(args.out, reads=(args.file,), table="the reduced netlist")
-    band = parse_band(args.band)
-    circuit = load(args.file)
+    band, circuit = parse_band(args.band), load(args.file)
     result = simplify(circuit, band, args.tol, output=args.element, points=args.points)
     if args.out:
         write_text(args.out, result.netlist)
@@ -270,8 +269,7 @@ def _cam_contact(scene, result) -> dict | None:
         return None
     if flew := flight(scene, result):
         return {"flight": flew}
-    rep = contact_report(scene, result)
-    L = scene.length_scale
+    rep, L = contact_report(scene, result), scene.length_scale
     return {"contact": scene.linkage.contact, "min_contact_N": rep.min_contact,
             "min_contact_angle_deg": rep.min_contact_angle_deg,
             "travel": [float(rep.travel.min() / L), float(rep.travel.max() / L)],

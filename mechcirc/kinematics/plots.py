@@ -239,8 +239,7 @@ def plot_shaking(result, fig=None):
         Figure): its four panels in a 2 × 2 grid.
     """
     fig, ax = _figure(2, 2, (10, 8), fig, "plot_shaking")
-    deg = np.degrees(result.theta)
-    S = result.shaking_force
+    deg, S = np.degrees(result.theta), result.shaking_force
     mag = result.shaking_force_magnitude
     a = ax[0, 0]
     a.plot(S[:, 0], S[:, 1], lw=1.4)

@@ -409,8 +409,7 @@ def _write_parquet(path, columns: list[str], chunks, record: dict) -> None:
     import pyarrow.parquet as pq
 
     arrow = {str: pa.string(), int: pa.int64(), float: pa.float64()}
-    types = {c: arrow[_cell_type(c)] for c in columns}
-    units = record["units"]
+    types, units = {c: arrow[_cell_type(c)] for c in columns}, record["units"]
     schema = pa.schema([pa.field(c, types[c], metadata=None if units[c] is None else
                                  {"unit": units[c]}) for c in columns],
                        metadata={"mechcirc": json.dumps(record, ensure_ascii=False)})

@@ -131,20 +131,22 @@ def drive_gain(ss: StateSpace, h: float, nt: int) -> float:
 
 def propagate_linear(ss: StateSpace, z0, u_in, h, elements, velocities):
     """The exact propagation of a linear circuit: (Z, T, nx, drive_y, x_ready, v_ready,
-    error of x from the steps, error of the shapes left out, path).
+    (error of x, of the drive's output w·z) from the steps, error of the shapes left out,
+    path).
 
     Node outputs only: the modal path block by block (:func:`propagate_modal_x`,
     x and v formed in it); else the modal signals (:func:`propagate_modal`, Z = Q
     with z = T q); else the block method (Z the states).  The second error is the part
     of x left out with the rounding-level imaginary parts of real shapes (x only).
-    The first bounds what the steps' own errors grow to in any x (None where not
-    finite): on the modal path each mode's (:func:`modal_plan`), on the block path the
+    The first bounds what the steps' own errors grow to in any x and in w·z (None where
+    not finite, or no w): on the modal path each mode's (:func:`modal_plan`), on the block path the
     one-step map's (:func:`map_errors`, entry by entry) through :func:`error_growth`.
     """
     x_only, dmap = velocities is False and not elements, drive_map(ss)
     w = None if dmap is None else dmap[0]
     plans = ss.memo("_modal_plans", dict)
-    Z = T = nx = drive_y = x_ready = v_ready = x_err = None
+    Z = T = nx = drive_y = x_ready = v_ready = None
+    x_err: tuple = (None, None)
     if not elements:                    # node outputs only: block by block
         x_ready, v_ready, why, dropped, drive_y, x_err = propagate_modal_x(
             ss.A, ss.B, z0, u_in, h, ss.Cx, w, plans, None if x_only else ss.Cv)
@@ -159,13 +161,14 @@ def propagate_linear(ss: StateSpace, z0, u_in, h, elements, velocities):
         found = known[h] if h in known else known.setdefault(h, map_errors(ss.A, ss.B, h))
         # Each step's error of z: the map's, entry by entry and relative to its largest
         # (a slow mode beside a stiff one: the entries' spread 18 × short, seed 2 net 188),
-        # times the states' largest magnitudes w, and rounding.
-        w, eta = np.abs(Z).max(axis=0, initial=0.0), map_error(ss.A, ss.B, h, found)
-        step = eta * (np.abs(maps[0]) @ w)
+        # times the states' largest magnitudes, and rounding; then x's, and the drive's w·z.
+        mag, eta = np.abs(Z).max(axis=0, initial=0.0), map_error(ss.A, ss.B, h, found)
+        step = eta * (np.abs(maps[0]) @ mag)
         if found is not None:
-            step += found[0][:w.size, :w.size] @ w
-        growth = error_growth(maps[0], ss.Cx, step, u_in.size)
-        x_err = None if growth is None else (u_in.size - 1) * growth
+            step += found[0][:mag.size, :mag.size] @ mag
+        x_err = tuple(None if g is None else (u_in.size - 1) * g for g in (
+            error_growth(maps[0], C, step, u_in.size) if C is not None else None
+            for C in (ss.Cx, None if w is None else w[None, :])))
         path = (f"block propagation (exact; the modal path needs independent mode shapes and "
                 f"is not used here: {why})")
     err = 0.0
@@ -328,8 +331,9 @@ def propagate_modal(A, B, z0, u, h, Cx=None, w=None, x_only=False, cache=None):
     wout = np.zeros(N) if w is None else np.asarray(w, dtype=float) @ T
     _modal_states(mu, g1, g2, q0, np.ascontiguousarray(u, float), cre, cim, Q, qmax, wout, y)
     dropped = _dropped(Cx, T, cim, late, qmax)
-    x_err = None if Cx is None else _modal_error(
-        np.ascontiguousarray((Cx @ T).T), qmax, cre, cim, plan[-1], nt)
+    x_err = tuple(None if S is None else _modal_error(S, qmax, cre, cim, plan[-1], nt) for S in (
+        None if Cx is None else np.ascontiguousarray((Cx @ T).T), None if w is None else
+        wout[:, None]))
     return (Q, T, note, (nx if Cx is not None else N), dropped, (None if w is None else y),
             x_err)
 
@@ -412,8 +416,9 @@ def propagate_modal_x(A, B, z0, u, h, Cx, w=None, cache=None, Cv=None):
         np.maximum(qmax, qm, out=qmax)
         q, qlast = qlast, q
     dropped = _dropped(Cx, T, cim, late, qmax) if Cv is None else 0.0
-    return X, V, note, dropped, (None if w is None else y), _modal_error(
-        Sx, qmax, cre, cim, plan[-1], nt)
+    return X, V, note, dropped, (None if w is None else y), tuple(
+        None if S is None else _modal_error(S, qmax, cre, cim, plan[-1], nt)
+        for S in (Sx, None if w is None else wout[:, None]))
 
 
 def _modal_error(Sx, qmax, cre, cim, errors, nt: int) -> float | None:

@@ -59,6 +59,10 @@ class TransientResult:
     clearances: dict = field(default_factory=dict)
     separations: list = field(default_factory=list)
     waveform: str | None = None
+    #: An estimate of the largest error of ``drive_force`` or ``drive_velocity`` from the
+    #: steps (a linear run with a drive known exactly at every step: harmonic, step,
+    #: impulse, a table on the grid), else None.
+    drive_error: float | None = None
     #: The CSV's number format (:meth:`write_csv`, ``mechcirc transient -o``): 12 digits.
     CSV_FORMAT = "%.12g"
 
@@ -96,7 +100,8 @@ class TransientResult:
                "drive": ({"force": self.drive_force} if self.drive_force is not None else
                          {"velocity": self.drive_velocity} if self.drive_velocity is not None
                          else {}),
-               "error": self.error, "method": self.method, "notes": list(self.notes),
+               "error": self.error, "drive_error": self.drive_error, "method": self.method,
+               "notes": list(self.notes),
                "units": {"t": "s", **self.units}}
         if self.clearances:
             doc["separations"] = [dataclasses.asdict(s) for s in self.separations]

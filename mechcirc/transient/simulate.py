@@ -169,10 +169,12 @@ def _linear_run(ss, circuit, z0, t, us, drive, notes, elements, velocities):
     out = _outputs(ss, circuit, t, Z, u, u_in, h, drive, method, err, notes, elements, T,
                    velocities, nx, drive_y, x_ready, v_ready)
     with np.errstate(all="ignore"):     # (the steps' error, else map error × steps × max|x|)
-        out.error = err + (x_err if x_err is not None else map_error(ss.A, ss.B, h) * (
+        out.error = err + (x_err[0] if x_err[0] is not None else map_error(ss.A, ss.B, h) * (
             t.size - 1) * _peak(out.x))
     if interp > 0.0:        # the drive's interpolation error, carried to x
         out.error += interp * drive_gain(ss, h, t.size)
+    elif out.drive_force is not None or out.drive_velocity is not None:
+        out.drive_error = x_err[1]      # (w·z's; an interpolated drive's is not carried)
     # (linear: the error is finite only if x is; NaN and ±inf reach max|x| or its bound)
     _require_finite(out, x_in_error=True)
     return out
