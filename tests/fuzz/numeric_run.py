@@ -640,6 +640,7 @@ def propagation(seed: int, count: int, dps: int = 40) -> int:
     responses ``crosscheck`` rings (levers, rigid-body pairs, stiff and slow modes; the
     ``transient`` campaign has none of these), models of up to 14 states."""
     from mechcirc.transient import _crosscheck
+    from mechcirc.transient.model import drive_map
     from mechcirc.transient.simulate import state_model
 
     runs: list = []
@@ -653,7 +654,8 @@ def propagation(seed: int, count: int, dps: int = 40) -> int:
 
     _crosscheck.transient = spy
     bad = checked = 0
-    ratios = []
+    ratios: list = []
+    drive_ratios: list = []
     try:
         for i, text, _, _ in networks(seed, count):
             runs.clear()
@@ -665,25 +667,37 @@ def propagation(seed: int, count: int, dps: int = 40) -> int:
                 ss = state_model(circuit, True)
                 if ss.A.shape[0] > 14 or r.time.size < 2 or not math.isfinite(r.error):
                     continue
+                y = r.drive_force if r.drive_force is not None else r.drive_velocity
+                rows = ss.Cx if r.drive_error is None else np.vstack([ss.Cx, drive_map(ss)[0]])
                 with mpmath.workdps(dps):
                     P = mpmath.expm(mpmath.matrix(ss.A.tolist())
                                     * mpmath.mpf(float(r.time[1] - r.time[0])))
                     z = mpmath.matrix((ss.initial[0] + ss.B).tolist())
-                    C, X = mpmath.matrix(ss.Cx.tolist()), []
+                    C, X = mpmath.matrix(rows.tolist()), []
                     for _ in range(r.time.size):
                         X.append([float(v) for v in C * z])
                         z = P * z
-                true = float(np.abs(r.x - np.array(X)).max())
+                X = np.array(X)
+                true = float(np.abs(r.x - X[:, :ss.Cx.shape[0]]).max())
                 checked += 1
                 ratios.append(true / r.error if r.error > 0 else math.inf)
                 if true > r.error:
                     bad += 1
                     print(f"net {i}: error {true:.3g} above its estimate {r.error:.3g} "
                           f"({r.method})")
+                if r.drive_error is not None:       # the drive's output w·z, its own error
+                    true_y = float(np.abs(y - X[:, -1]).max())
+                    drive_ratios.append(true_y / r.drive_error if r.drive_error > 0 else math.inf)
+                    if true_y > r.drive_error:
+                        bad += 1
+                        print(f"net {i}: the drive's output {true_y:.3g} off, above its "
+                              f"estimate {r.drive_error:.3g} ({r.method})")
     finally:
         _crosscheck.transient = original
-    print(f"propagation, seed {seed}: {checked} runs, {bad} above their error; true/estimate "
-          f"largest {max(ratios, default=0):.3g}, median {np.median(ratios or [0]):.3g}")
+    print(f"propagation, seed {seed}: {checked} runs, {bad} above their error (x or the "
+          f"drive's output); true/estimate largest {max(ratios, default=0):.3g}, median "
+          f"{np.median(ratios or [0]):.3g}; the drive's output ({len(drive_ratios)} runs) "
+          f"largest {max(drive_ratios, default=0):.3g}")
     return bad
 
 
