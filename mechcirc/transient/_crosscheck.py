@@ -44,8 +44,8 @@ from ..circuit import Circuit
 from ..errors import MechcircError
 from ..identify import fit_sinusoid, judge_pole, nearest_pole, pole_of, pole_weights, poles
 from ..verdict import DISAGREES, checked_repr, judge, summarise
-from .model import backlash_elements, drive_map
-from .propagate import ROUNDING_PER_STEP, map_error, step_maps
+from .model import backlash_elements
+from .propagate import ROUNDING_PER_STEP, step_maps
 from .simulate import periodic_start, state_model, transient, with_oscillator
 from .waveform import Waveform
 
@@ -227,39 +227,19 @@ def _judge_mode(row: dict, r, others, s: np.ndarray, parts: tuple, dt: float,
         row["decay_rel_error"] = float(abs(row["decay"] - sigma) / sigma)
 
 
-def _output_rounding(circuit, w, h, steps, amp):
-    """Rounding of the drive's output y = row·z of a steady run, mode by mode.
-
-    In the eigenbasis of the run's matrix (the circuit's with the drive's
-    oscillator), mode j of amplitude |q_j| is propagated with rounding of its
-    own size per step and reaches y through Σ_i |row_i| |V_ij|: a heavily
-    weighted small state (a massless damped node, k/c) takes rounding from
-    the large modes too.  Bound: steps · δ · Σ_j (Σ_i |row_i||V_ij|) |q_j|, δ the
-    one-step map's error measured beside a stiff mode (:func:`~.propagate.map_error`),
-    at least 10 × 8ε.  Without independent eigenvectors (a defective matrix: rigid and
-    repeated modes) every state takes the rounding of the largest:
-    steps · δ · Σ_i |row_i| · max|z₀|.  Plus the rounding of the row itself,
-    4ε Σ |terms| of each coefficient times the state's amplitude: a stiff spring's
-    force from two node motions that differ by 1e-7 of their size (seed 3, network
-    137 of the crosscheck campaign: 2e-9 of the force).
-    """
+def _row_rounding(circuit, w, amp):
+    """Rounding of forming the drive's output y = row·z of a steady run (the run's
+    ``drive_error`` has its propagation): 4ε Σ |terms| of each coefficient times the
+    state's amplitude, √(z² + (ż/ω)²) of the steady sinusoid, a stiff spring's force from
+    two node motions that differ by 1e-7 of their size (seed 3, network 137 of the
+    crosscheck campaign: 2e-9 of the force)."""
     ss = state_model(circuit, True)
     z0 = periodic_start(ss, Waveform("harmonic", omega=w), amp, circuit, True)
     aug, z0 = with_oscillator(ss, z0, w, amp)
-    row = drive_map(aug)[0]
-    per_step = steps * max(10 * ROUNDING_PER_STEP, map_error(aug.A, aug.B, h))
     # the output's rows on a, v, x (a force drive's output is the velocity g·v)
     rows = aug.drive_rows() if aug.kind == "velocity" else (0 * aug.g, aug.g, 0 * aug.g)
-    terms = sum(np.abs(w) @ np.abs(C) for w, C in zip(rows, (aug.Cv @ aug.A, aug.Cv, aug.Cx)))
-    V = np.linalg.eig(aug.A)[1]
-    try:
-        with warnings.catch_warnings(action="error", category=la.LinAlgWarning):
-            q = la.solve(V, z0.astype(complex))
-    except (la.LinAlgError, la.LinAlgWarning):
-        size = np.abs(z0).max()
-        return float((per_step * np.abs(row).sum() + ROUNDING_PER_STEP / 2 * terms.sum()) * size)
-    return float(per_step * (np.abs(row) @ np.abs(V)) @ np.abs(q)
-                 + ROUNDING_PER_STEP / 2 * terms @ (np.abs(V) @ np.abs(q)))  # (4ε)
+    terms = sum(np.abs(r) @ np.abs(C) for r, C in zip(rows, (aug.Cv @ aug.A, aug.Cv, aug.Cx)))
+    return float(ROUNDING_PER_STEP / 2 * terms @ np.hypot(z0, (aug.A @ z0) / w))  # (4ε)
 
 
 def crosscheck(circuit: Circuit, omega_max: float | None = None,
@@ -350,8 +330,10 @@ def _steady(circuit: Circuit, omegas: list, sweep, out: CrossCheck, progress) ->
         y = run.drive_force if d.kind == "velocity" else run.drive_velocity
         assert y is not None            # a driven circuit's run has the drive's output
         t = run.time
-        # the time domain's own rounding of y (heavily weighted small states)
-        tol = max(tol, _output_rounding(circuit, w, t[1] - t[0], t.size - 1, d.amplitude) / exp)
+        # the time domain's own error of y: its propagation (the run's drive_error: heavily
+        # weighted small states), and the rounding of forming it
+        assert run.drive_error is not None      # (an exact, harmonic drive)
+        tol = max(tol, (run.drive_error + _row_rounding(circuit, w, d.amplitude)) / exp)
         measured, departure = fit_sinusoid(t, y, w)
         row["measured"] = float(measured)
         rel = row["rel_error"] = float(abs(measured - exp) / exp)
