@@ -178,15 +178,16 @@ class PeriodicResult:
         unit = {"angle_deg": "deg", "Q": u["Q"], "x": u["x"], "v": u["v"], "F": u["Q"], "dv": u["v"]}
         return quantity_frame(cols, unit)
 
-    def plot(self, fig=None):
+    def plot(self, ax=None, fig=None):
         """Q(θ) beside its spectrum with |K| and the resonances: :func:`mechcirc.plotting.plot_periodic`.
 
-        Returns the Figure drawn on: ``fig`` (which must be an *empty* Figure or
-        SubFigure; one already holding Axes is refused with an InputError) or a new one.
+        Returns what it drew on: ``ax`` (Q(θ) only, on the caller's Axes), ``fig`` (which
+        must be an *empty* Figure or SubFigure; one already holding Axes is refused with an
+        InputError) or a new Figure.
         """
         from .plotting import plot_periodic
 
-        return plot_periodic(self, fig=fig)
+        return plot_periodic(self, ax=ax, fig=fig)
 
 
 @dataclass

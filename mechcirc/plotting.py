@@ -725,28 +725,36 @@ def _study_scatter(fig, ax, ok, bad, params, column, units) -> None:
     ax.set(xlabel=_unit_label(px, units), ylabel=_unit_label(py, units))
 
 
-def plot_periodic(result, title: str | None = None, *, fig=None):
+def plot_periodic(result, title: str | None = None, *, ax=None, fig=None):
     """Q(θ) [N] over the crank angle beside its spectrum |Q_k| [N] at ω = kΩ, with
     |K(kΩ)| [m/(N·s)] and the resonances (a :class:`mechcirc.periodic.PeriodicResult`;
     labelled in ``result.units``: N·m and rad/(N·m·s) for a rotary drive).
 
-    Two panels on ``fig`` (a new Figure by default), which is returned.
+    Two panels on ``fig`` (a new Figure by default), which is returned; with ``ax``
+    the main one, Q(θ) and the element forces, on the caller's Axes.
     Harmonics near a resonance are drawn in red.
 
     Parameters
     ----------
     result : PeriodicResult
     title : str, optional
+    ax : matplotlib Axes, optional
+        Draw Q(θ) only, there (nothing else on its figure is touched).
     fig : matplotlib.figure.Figure or SubFigure, optional
         An empty one to fill (see :func:`new_panels`); a new one by default.
 
     Returns
     -------
-    matplotlib.figure.Figure or matplotlib.figure.SubFigure
-        What it drew on: ``fig`` when given (it must be empty), else the new Figure.
+    matplotlib Axes, matplotlib.figure.Figure or matplotlib.figure.SubFigure
+        What it drew on: ``ax`` when given, else ``fig`` (it must be empty) or the new
+        Figure.
     """
     u = result.units
     word = "moment" if u["Q"] == "N·m" else "force"
+    if ax is not None:
+        _periodic_angle_panel(ax, result, f"{word} [{u['Q']}]")
+        ax.set_title(title or f"{result.name}: drive {word} at {result.rpm:g} rpm")
+        return ax
     made = fig is None
     fig, ((ax_q, ax_s),) = new_panels(fig, 1, 2, caller="plot_periodic", figsize=(11, 4.2),
                                       gridspec_kw={"width_ratios": [3, 2]})

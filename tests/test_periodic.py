@@ -306,6 +306,13 @@ def test_plots_follow_the_ax_convention():
     ax = Figure().add_subplot()
     assert m.plot(ax=ax) is ax and ax.lines
     assert isinstance(m.plot(), Figure)
+    # PeriodicResult.plot(ax=) raised TypeError (new-user pass): now its main panel, Q(θ)
+    # and the element's force, on the caller's Axes, beside the caller's own panel
+    fig = Figure()
+    left, right = fig.subplots(1, 2)
+    left.plot([0, 1], [0, 1])
+    assert r.plot(ax=right) is right and len(right.lines) == 2
+    assert len(left.lines) == 1 and len(fig.axes) == 2
 
 
 @pytest.mark.parametrize("rpm", [250, 400])
