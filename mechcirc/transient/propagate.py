@@ -166,9 +166,10 @@ def propagate_linear(ss: StateSpace, z0, u_in, h, elements, velocities):
         step = eta * (np.abs(maps[0]) @ mag)
         if found is not None:
             step += found[0][:mag.size, :mag.size] @ mag
-        x_err = tuple(None if g is None else (u_in.size - 1) * g for g in (
-            error_growth(maps[0], C, step, u_in.size) if C is not None else None
-            for C in (ss.Cx, None if w is None else w[None, :])))
+        g = (u_in.size - 1) * error_growth(maps[0], ss.Cx if w is None else np.vstack(
+            [ss.Cx, w]), step, u_in.size)       # (x's rows and the drive's: one pass)
+        x_err = tuple(float(v) if np.isfinite(v) else None for v in (
+            g[:ss.Cx.shape[0]].max(initial=0.0), np.nan if w is None else g[-1]))
         path = (f"block propagation (exact; the modal path needs independent mode shapes and "
                 f"is not used here: {why})")
     err = 0.0
@@ -179,10 +180,11 @@ def propagate_linear(ss: StateSpace, z0, u_in, h, elements, velocities):
     return Z, T, nx, drive_y, x_ready, v_ready, x_err, err, path
 
 
-def error_growth(Phi: np.ndarray, Cx: np.ndarray, step: np.ndarray, nt: int) -> float | None:
+def error_growth(Phi: np.ndarray, C: np.ndarray, step: np.ndarray, nt: int) -> np.ndarray:
     """What an error ``step`` (a bound of each state's error) made at one step grows to in
-    any x: max over m of max |Cx Φᵐ| ``step``, m = 0, the powers of 2 below the number of
-    steps and that number less one (None where not finite).
+    each output C z: max over m of |C Φᵐ| ``step``, m = 0, the powers of 2 below the
+    number of steps and that number less one (one value per row of C; not finite where
+    it overflows).
 
     Made at each of the nt − 1 steps, they give x an error ≤ (nt − 1) × this.  It is
     about one step's error in x where Φᵐ stays bounded and the states do not cancel in
@@ -193,15 +195,15 @@ def error_growth(Phi: np.ndarray, Cx: np.ndarray, step: np.ndarray, nt: int) -> 
     """
     last = nt - 2                       # (the steps less one: the largest m)
     with np.errstate(all="ignore"):
-        found, P, R, m = float((np.abs(Cx) @ step).max(initial=0.0)), Phi, None, 1
-        while m <= last and np.isfinite(found):
-            found = max(found, float((np.abs(Cx @ P) @ step).max(initial=0.0)))
+        found, P, R, m = np.abs(C) @ step, Phi, None, 1
+        while m <= last and np.isfinite(found).any():
+            found = np.maximum(found, np.abs(C @ P) @ step)
             if last & m:                # Φ^last from its binary digits
                 R = P if R is None else R @ P
             P, m = P @ P, 2 * m
         if R is not None:
-            found = max(found, float((np.abs(Cx @ R) @ step).max(initial=0.0)))
-    return found if np.isfinite(found) else None
+            found = np.maximum(found, np.abs(C @ R) @ step)
+    return found
 
 
 def discretise(A: np.ndarray, B: np.ndarray, h: float):
@@ -294,7 +296,7 @@ def propagate_modal(A, B, z0, u, h, Cx=None, w=None, x_only=False, cache=None):
     Z = Q Tᵀ.
 
     (None, None, note, 0, 0.0, None, None) when refused.  The error (with ``Cx``, else
-    None) is :func:`_modal_error`'s.
+    None) is :func:`_modal_errors`'.
 
     A = V Λ V⁻¹ (real A: real modes and conjugate pairs; one of each pair is
     propagated, q⁺ = μ q + g₁ u + g₂ Δu with μ = e^{λh}, g₁ = h φ₁(λh) b,
@@ -331,9 +333,8 @@ def propagate_modal(A, B, z0, u, h, Cx=None, w=None, x_only=False, cache=None):
     wout = np.zeros(N) if w is None else np.asarray(w, dtype=float) @ T
     _modal_states(mu, g1, g2, q0, np.ascontiguousarray(u, float), cre, cim, Q, qmax, wout, y)
     dropped = _dropped(Cx, T, cim, late, qmax)
-    x_err = tuple(None if S is None else _modal_error(S, qmax, cre, cim, plan[-1], nt) for S in (
-        None if Cx is None else np.ascontiguousarray((Cx @ T).T), None if w is None else
-        wout[:, None]))
+    x_err = _modal_errors((None if Cx is None else np.ascontiguousarray((Cx @ T).T),
+                           None if w is None else wout[:, None]), qmax, cre, cim, plan[-1], nt)
     return (Q, T, note, (nx if Cx is not None else N), dropped, (None if w is None else y),
             x_err)
 
@@ -416,16 +417,17 @@ def propagate_modal_x(A, B, z0, u, h, Cx, w=None, cache=None, Cv=None):
         np.maximum(qmax, qm, out=qmax)
         q, qlast = qlast, q
     dropped = _dropped(Cx, T, cim, late, qmax) if Cv is None else 0.0
-    return X, V, note, dropped, (None if w is None else y), tuple(
-        None if S is None else _modal_error(S, qmax, cre, cim, plan[-1], nt)
-        for S in (Sx, None if w is None else wout[:, None]))
+    return X, V, note, dropped, (None if w is None else y), _modal_errors(
+        (Sx, None if w is None else wout[:, None]), qmax, cre, cim, plan[-1], nt)
 
 
-def _modal_error(Sx, qmax, cre, cim, errors, nt: int) -> float | None:
-    """Error of x on the modal path (:func:`_mode_errors`): the rounding each step and the
-    eigenvalues' errors over the run's time T, each other mode's forcing for at most
-    min(T, 2/|λᵢ − λⱼ|) (twice that, first order), and the modal map's deviation, through
-    the modes' largest amplitudes and shapes (:func:`_x_bound`)."""
+def _modal_errors(outputs, qmax, cre, cim, errors, nt: int) -> tuple:
+    """Error of each of ``outputs`` (Sx-shaped: the modes' columns through to x, or the
+    drive's w·z; None: none) on the modal path (:func:`_mode_errors`): the rounding each
+    step and the eigenvalues' errors over the run's time T, each other mode's forcing for
+    at most min(T, 2/|λᵢ − λⱼ|) (twice that, first order), and the modal map's deviation,
+    through the modes' largest amplitudes and the output's shapes (:func:`_x_bound`);
+    None where not finite.  What each mode's amplitude gains is the same for all."""
     rounding, coupling, conjugates, lam, h, dev_step, dev_once = errors
     T = (nt - 1) * h
     if conjugates is None:          # (each eigenvalue's bound alone)
@@ -435,9 +437,12 @@ def _modal_error(Sx, qmax, cre, cim, errors, nt: int) -> float | None:
             gain = [np.minimum(T, 2 / np.abs(lam[:, None] - mu[None, :]))
                     for mu in (lam, lam.conj())]
         drift = (coupling * gain[0] + conjugates * gain[1]) @ qmax
-    grown = _x_bound(Sx, (rounding + dev_step) * (nt - 1) * qmax + 2 * drift, cre, cim)
-    once = _x_bound(Sx, qmax, cre, cim)
-    return None if grown is None or once is None else grown + dev_once * once
+    gained, out = (rounding + dev_step) * (nt - 1) * qmax + 2 * drift, []
+    for S in outputs:
+        grown, once = (None, None) if S is None else (_x_bound(S, gained, cre, cim),
+                                                      _x_bound(S, qmax, cre, cim))
+        out.append(None if grown is None or once is None else grown + dev_once * once)
+    return tuple(out)
 
 
 def _x_bound(Sx, qmax, cre, cim) -> float | None:
@@ -513,7 +518,7 @@ RESIDUAL_MAX = 256
 
 def _mode_errors(A, lam, V, Vinv, h, cplx, dev) -> tuple:
     """What the modal path's error grows by, from the modes' largest amplitudes
-    (:func:`_modal_error`): ``(rounding, coupling, its conjugates', λ, h, deviation each
+    (:func:`_modal_errors`): ``(rounding, coupling, its conjugates', λ, h, deviation each
     step, deviation once)``.
 
     The modal recurrence is exactly the solution for A' = V Λ V⁻¹ = A − R V⁻¹, R = A V −
