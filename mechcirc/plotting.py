@@ -12,9 +12,9 @@ One convention for every plot function of mechcirc:
   engine stay the caller's).  A figure already holding Axes is refused with
   an :class:`~mechcirc.errors.InputError` rather than drawn over: pass
   ``fig=None`` or an empty subfigure of yours (``fig.subfigures()``).  Given
-  ``ax=``, a multi-panel plot draws its main panel there and returns that
-  Axes (:func:`plot_sweep`, :func:`plot_transient`,
-  :func:`mechcirc.scene.cycle.plot_cycle`);
+  ``ax=``, a multi-panel plot draws its main (first) panel there and returns
+  that Axes, touching nothing else of the caller's figure (every plot function
+  takes ``ax=``);
 * nothing here deletes, clears or moves what the caller drew, touches
   pyplot's state or calls ``matplotlib.use``: figures are built with the
   object-oriented ``Figure``, so a notebook's backend is left alone and the
@@ -43,7 +43,7 @@ __all__ = ["new_panels", "one_panel", "plot_sweep", "plot_transient", "plot_forc
 
 def new_panels(fig, rows: int = 1, cols: int = 1, *, caller: str, figsize=(8.0, 6.0),
                layout: Literal["constrained", "compressed", "tight"] | None = None,
-               **subplots_kw):
+               ax=None, **subplots_kw):
     """The ``rows`` × ``cols`` panels of a plot, on ``fig`` or on a new Figure.
 
     The one place a plot function gets its Figure.  Panels are never drawn
@@ -67,6 +67,9 @@ def new_panels(fig, rows: int = 1, cols: int = 1, *, caller: str, figsize=(8.0, 
         Size [in] of a new Figure.
     layout : str, optional
         Layout engine of a new Figure (``"constrained"``, ``"tight"``).
+    ax : matplotlib.axes.Axes, optional
+        The caller's Axes as the main panel ``[0, 0]`` (``fig`` not used): the others
+        go on a new Figure never shown, and nothing else of the caller's is touched.
     **subplots_kw
         Passed to ``Figure.subplots`` (``sharex``, ``gridspec_kw``, ...).
 
@@ -81,10 +84,15 @@ def new_panels(fig, rows: int = 1, cols: int = 1, *, caller: str, figsize=(8.0, 
     InputError
         ``fig`` already holds Axes or subfigures.
     """
-    if fig is None:
+    if fig is None or ax is not None:
         from matplotlib.figure import Figure
 
         fig = Figure(figsize=figsize, layout=layout)
+        if ax is not None:            # the main panel the caller's; the others never shown
+            axes = fig.subplots(rows, cols, squeeze=False, **subplots_kw)
+            axes[0, 0].remove()
+            axes[0, 0] = ax
+            return fig, axes
     elif fig.axes or fig.subfigs:
         raise InputError(
             f"{caller}: the figure given as fig= already holds {len(fig.axes)} Axes and "
@@ -116,11 +124,19 @@ def one_panel(ax, figsize):
     return fig, axes[0, 0], True
 
 
-def laid_out(made, fig, ax=None):
-    """A Figure made here laid out and returned; a given one (its layout the caller's) or ``ax`` as is."""
+def laid_out(made, fig, ax=None, axes=None):
+    """A Figure made here laid out and returned; a given one (its layout the caller's) or ``ax``.
+
+    ``axes``: the panels of a multi-panel plot whose main one is the caller's ``ax``
+    (:func:`new_panels`), which then gets the bottom panel's x label and the plot's
+    title where it has none of its own.
+    """
     if made:
         fig.tight_layout()
         return fig
+    if ax is not None and axes is not None:
+        ax.get_xlabel() or ax.set_xlabel(axes[-1, 0].get_xlabel())
+        ax.get_title() or ax.set_title(fig.get_suptitle())
     return fig if ax is None else ax
 
 
@@ -605,7 +621,7 @@ def plot_forces(rows, omega: float, name: str = "circuit", title: str | None = N
 
 
 def plot_comparison(comparison, name: str = "circuit", measured: str = "measured",
-                    title: str | None = None, *, fig=None, units: dict | None = None):
+                    title: str | None = None, *, ax=None, fig=None, units: dict | None = None):
     """A measured mobility over the model's: |K| and arg K [deg] against ω [rad/s].
 
     Two panels, on ``fig`` when given (else a new Figure); returns the Figure.
@@ -619,20 +635,22 @@ def plot_comparison(comparison, name: str = "circuit", measured: str = "measured
     name, measured : str
         Legend labels.
     title : str, optional
+    ax : matplotlib.axes.Axes, optional
+        Draw only the |K| panel there (nothing else of its figure is touched); ``fig``
+        is then not used.
     fig : matplotlib.figure.Figure or SubFigure, optional
         An empty one to fill (see :func:`new_panels`); a new one by default.
     units : dict, optional
 
     Returns
     -------
-    matplotlib.figure.Figure or matplotlib.figure.SubFigure
-        What it drew on: ``fig`` when given (it must be empty), else the new Figure.
+    matplotlib Axes, matplotlib.figure.Figure or matplotlib.figure.SubFigure
+        What it drew on: ``ax`` when given, else ``fig`` (it must be empty) or the new Figure.
     """
     u = units or units_of(None)
-
-    made = fig is None
+    made = fig is None and ax is None
     fig, ((ax_k,), (ax_p,)) = new_panels(fig, 2, caller="plot_comparison", figsize=(7, 6), sharex=True,
-                                         gridspec_kw={"height_ratios": [3, 2]})
+                                         ax=ax, gridspec_kw={"height_ratios": [3, 2]})
     w = comparison.omega
     with np.errstate(all="ignore"):
         for K, label, style in ((comparison.K_model, "model", "-"),
@@ -642,10 +660,10 @@ def plot_comparison(comparison, name: str = "circuit", measured: str = "measured
     ax_k.set_ylabel(f"|K| [{u['K']}]")
     ax_p.set(**_PHASE_AXIS, xlabel="ω [rad/s]")
     ax_k.legend(loc="best", fontsize="small")
-    for ax in (ax_k, ax_p):
-        ax.grid(True, which="both", alpha=0.3)
+    for panel in (ax_k, ax_p):
+        panel.grid(True, which="both", alpha=0.3)
     fig.suptitle(title or f"{name}: model against {measured}")
-    return laid_out(made, fig)
+    return laid_out(made, fig, ax, np.array([[ax_k], [ax_p]]))
 
 
 def plot_study(result, params, column: str, name: str = "study", title: str | None = None, *,
@@ -730,35 +748,38 @@ def plot_periodic(result, title: str | None = None, *, ax=None, fig=None):
     |K(kΩ)| [m/(N·s)] and the resonances (a :class:`mechcirc.periodic.PeriodicResult`;
     labelled in ``result.units``: N·m and rad/(N·m·s) for a rotary drive).
 
-    Two panels on ``fig`` (a new Figure by default), which is returned; with ``ax``
-    the main one, Q(θ) and the element forces, on the caller's Axes.
-    Harmonics near a resonance are drawn in red.
+    Two panels; harmonics near a resonance are drawn in red.
 
     Parameters
     ----------
     result : PeriodicResult
     title : str, optional
     ax : matplotlib Axes, optional
-        Draw Q(θ) only, there (nothing else on its figure is touched).
+        Draw only the main panel, Q(θ) and the element forces, there (nothing else
+        of its figure is touched).
     fig : matplotlib.figure.Figure or SubFigure, optional
         An empty one to fill (see :func:`new_panels`); a new one by default.
 
     Returns
     -------
     matplotlib Axes, matplotlib.figure.Figure or matplotlib.figure.SubFigure
-        What it drew on: ``ax`` when given, else ``fig`` (it must be empty) or the new
-        Figure.
+        What it drew on: ``ax``, else ``fig`` (it must be empty) or the new Figure.
     """
     u = result.units
     word = "moment" if u["Q"] == "N·m" else "force"
-    if ax is not None:
-        _periodic_angle_panel(ax, result, f"{word} [{u['Q']}]")
-        ax.set_title(title or f"{result.name}: drive {word} at {result.rpm:g} rpm")
-        return ax
-    made = fig is None
-    fig, ((ax_q, ax_s),) = new_panels(fig, 1, 2, caller="plot_periodic", figsize=(11, 4.2),
-                                      gridspec_kw={"width_ratios": [3, 2]})
-    _periodic_angle_panel(ax_q, result, f"{word} [{u['Q']}]")
+    made = fig is None and ax is None
+    fig, axes = new_panels(fig, 1, 2, caller="plot_periodic", figsize=(11, 4.2), ax=ax,
+                           gridspec_kw={"width_ratios": [3, 2]})
+    (ax_q, ax_s), = axes
+    ax_q.plot(result.angle_deg, result.Q, color="C0", label="Q(θ), drive")
+    for name, f in result.forces.items():
+        ax_q.plot(result.angle_deg, f, lw=0.9, label=f"{name}")
+    if result.unbounded:
+        ax_q.text(0.5, 0.5, "unbounded: harmonic on an undamped resonance",
+                  transform=ax_q.transAxes, ha="center", color="C3")
+    ax_q.set(xlabel="crank angle θ [deg]", ylabel=f"{word} [{u['Q']}]", xlim=(0, 360))
+    ax_q.grid(True, alpha=0.3)
+    ax_q.legend(loc="best", fontsize="small")
     with np.errstate(all="ignore"):
         amp, absK = np.abs(result.amplitude), np.abs(result.K)
     top = float(np.max(amp[np.isfinite(amp)], initial=0.0))
@@ -781,20 +802,7 @@ def plot_periodic(result, title: str | None = None, *, ax=None, fig=None):
     fig.suptitle(title or f"{result.name}: drive {word} over one revolution at "
                           f"{result.rpm:g} rpm ({result.harmonics} harmonics, error "
                           f"{result.error:.1g})")
-    return laid_out(made, fig)
-
-
-def _periodic_angle_panel(ax, result, ylabel: str) -> None:
-    """:func:`plot_periodic`'s left panel: Q(θ) and the element forces over the crank angle."""
-    ax.plot(result.angle_deg, result.Q, color="C0", label="Q(θ), drive")
-    for name, f in result.forces.items():
-        ax.plot(result.angle_deg, f, lw=0.9, label=f"{name}")
-    if result.unbounded:
-        ax.text(0.5, 0.5, "unbounded: harmonic on an undamped resonance",
-                transform=ax.transAxes, ha="center", color="C3")
-    ax.set(xlabel="crank angle θ [deg]", ylabel=ylabel, xlim=(0, 360))
-    ax.grid(True, alpha=0.3)
-    ax.legend(loc="best", fontsize="small")
+    return laid_out(made, fig, ax, axes)
 
 
 def plot_speed_map(result, title: str | None = None, *, ax=None, min_weight: float = 1e-3):
@@ -890,7 +898,7 @@ def plot_mode(mode, name: str = "circuit", title: str | None = None, *, ax=None,
     return laid_out(made, fig, ax)
 
 
-def plot_modes(found, name: str = "circuit", *, fig=None, unit: str = "rad/s"):
+def plot_modes(found, name: str = "circuit", *, ax=None, fig=None, unit: str = "rad/s"):
     """One panel per mode of ``found`` (from :func:`mechcirc.modes.modes`) by
     :func:`plot_mode`, stacked, on ``fig`` when given (else a new Figure); returns the Figure.
 
@@ -898,6 +906,9 @@ def plot_modes(found, name: str = "circuit", *, fig=None, unit: str = "rad/s"):
     ----------
     found : list of Mode
     name : str
+    ax : matplotlib.axes.Axes, optional
+        Draw only the first mode's panel there (nothing else of its figure is touched); ``fig``
+        is then not used.
     fig : matplotlib.figure.Figure or SubFigure, optional
         An empty one to fill (see :func:`new_panels`); a new one by default.
     unit : {"rad/s", "Hz", "rpm"}
@@ -905,12 +916,12 @@ def plot_modes(found, name: str = "circuit", *, fig=None, unit: str = "rad/s"):
 
     Returns
     -------
-    matplotlib.figure.Figure or matplotlib.figure.SubFigure
-        What it drew on: ``fig`` when given (it must be empty), else the new Figure.
+    matplotlib Axes, matplotlib.figure.Figure or matplotlib.figure.SubFigure
+        What it drew on: ``ax`` when given, else ``fig`` (it must be empty) or the new Figure.
     """
-    made = fig is None
-    fig, axes = new_panels(fig, max(len(found), 1), caller="plot_modes", figsize=(
+    made = fig is None and ax is None
+    fig, axes = new_panels(fig, max(len(found), 1), caller="plot_modes", ax=ax, figsize=(
         max(6.0, 0.45 * max((len(m.shape) for m in found), default=0) + 2), 2.6 * max(len(found), 1)))
-    for mode, ax in zip(found, axes[:, 0]):
-        plot_mode(mode, name, ax=ax, unit=unit)
-    return laid_out(made, fig)
+    for mode, panel in zip(found, axes[:, 0]):
+        plot_mode(mode, name, ax=panel, unit=unit)
+    return laid_out(made, fig, ax, axes)

@@ -72,7 +72,8 @@ def made():
 
 
 def _multi(m):
-    """(name, call with fig=) of every plot that draws several panels on a Figure."""
+    """(name, call with fig= or ax=) of every plot that draws several panels on a Figure
+    (given ax=, only its main panel)."""
     from mechcirc.kinematics import plots as kp
     from mechcirc.plotting import (plot_comparison, plot_modes, plot_periodic, plot_sweep,
                                    plot_transient)
@@ -81,19 +82,19 @@ def _multi(m):
     from mechcirc.sley.plots import plot_result
 
     return [
-        ("plot_sweep", lambda fig: plot_sweep(m["sweep"], fig=fig)),
-        ("plot_transient", lambda fig: plot_transient(m["transient"], elements=["k"], fig=fig)),
-        ("plot_comparison", lambda fig: plot_comparison(m["comparison"], fig=fig)),
-        ("plot_periodic", lambda fig: plot_periodic(m["periodic"], fig=fig)),
-        ("plot_modes", lambda fig: plot_modes(m["modes"][:2], fig=fig)),
-        ("plot_cycle", lambda fig: plot_cycle(m["cycle"], fig=fig)),
-        ("plot_motion", lambda fig: plot_motion(m["motion"], fig=fig)),
-        ("plot_result", lambda fig: plot_result(m["sley"], fig=fig)),
-        ("plot_fourbar", lambda fig: kp.plot_fourbar(m["fourbar"], fig=fig)),
-        ("plot_synthesis", lambda fig: kp.plot_synthesis(m["designs"], n=61, fig=fig)),
-        ("plot_frame_loading", lambda fig: kp.plot_frame_loading(m["frame"], fig=fig)),
-        ("plot_shaking", lambda fig: kp.plot_shaking(m["frame"], fig=fig)),
-        ("plot_linkage", lambda fig: kp.plot_linkage(*m["linkage"], fig=fig)),
+        ("plot_sweep", lambda fig=None, ax=None: plot_sweep(m["sweep"], fig=fig, ax=ax)),
+        ("plot_transient", lambda fig=None, ax=None: plot_transient(m["transient"], elements=["k"], fig=fig, ax=ax)),
+        ("plot_comparison", lambda fig=None, ax=None: plot_comparison(m["comparison"], fig=fig, ax=ax)),
+        ("plot_periodic", lambda fig=None, ax=None: plot_periodic(m["periodic"], fig=fig, ax=ax)),
+        ("plot_modes", lambda fig=None, ax=None: plot_modes(m["modes"][:2], fig=fig, ax=ax)),
+        ("plot_cycle", lambda fig=None, ax=None: plot_cycle(m["cycle"], fig=fig, ax=ax)),
+        ("plot_motion", lambda fig=None, ax=None: plot_motion(m["motion"], fig=fig, ax=ax)),
+        ("plot_result", lambda fig=None, ax=None: plot_result(m["sley"], fig=fig, ax=ax)),
+        ("plot_fourbar", lambda fig=None, ax=None: kp.plot_fourbar(m["fourbar"], fig=fig, ax=ax)),
+        ("plot_synthesis", lambda fig=None, ax=None: kp.plot_synthesis(m["designs"], n=61, fig=fig, ax=ax)),
+        ("plot_frame_loading", lambda fig=None, ax=None: kp.plot_frame_loading(m["frame"], fig=fig, ax=ax)),
+        ("plot_shaking", lambda fig=None, ax=None: kp.plot_shaking(m["frame"], fig=fig, ax=ax)),
+        ("plot_linkage", lambda fig=None, ax=None: kp.plot_linkage(*m["linkage"], fig=fig, ax=ax)),
     ]
 
 
@@ -208,3 +209,20 @@ def test_plot_cycle_on_ax_draws_the_resonances_as_the_upper_panel(made):
         np.testing.assert_array_equal(a, b.get_xydata())
     W = made["cycle"].natural_frequencies()
     np.testing.assert_allclose(drawn[0][:, 1], W[:, 0] / (2 * math.pi), rtol=1e-12)
+
+
+def test_ax_of_a_multi_panel_plot_is_its_main_panel_line_for_line(made):
+    """Every multi-panel plot takes ax=: its first panel drawn there, as on its own Figure,
+    labelled and titled, and nothing added to the caller's figure."""
+    for name, call in _multi(made):
+        if name in ("plot_sweep", "plot_cycle", "plot_linkage"):   # their own tests
+            continue
+        fig, mine, line = _callers_figure()
+        assert call(ax=mine) is mine, name
+        assert fig.axes == [mine] and line in mine.lines, name
+        own = call().axes[0]
+        drawn = [ln for ln in mine.lines if ln is not line]
+        assert drawn and len(drawn) == len(own.lines), name
+        for a, b in zip(drawn, own.lines):
+            np.testing.assert_array_equal(a.get_xydata(), b.get_xydata(), err_msg=name)
+        assert mine.get_xlabel() and mine.get_title(), name

@@ -584,8 +584,7 @@ def load_with_warnings(path):
     from ..circuit import units_of
     from ..netlist import load
 
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
+    with warnings.catch_warnings(record=True, action="always") as caught:
         circuit = load(path)
         try:
             _ = circuit.tree    # reduce now, so topology errors and warnings surface here

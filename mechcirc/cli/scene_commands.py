@@ -351,8 +351,8 @@ def _shaft(args, scene) -> int:
     if args.method not in (None, "rk4", "rk8", "DOP853"):
         raise MechcircError(f"--method {args.method} does not apply to --shaft: use rk4, rk8 "
                             "(fixed steps, --steps-per-period) or DOP853 (--rtol)")
-    with warnings.catch_warnings(record=True):
-        warnings.simplefilter("always", ShaftWarning)     # kept in the notes, printed below
+    # (the shaft's warnings are kept in the notes, printed below)
+    with warnings.catch_warnings(record=True, action="always", category=ShaftWarning):
         r = simulate_shaft(scene, flywheel=args.flywheel, points=args.points or 720,
                            rigid=args.rigid, method=args.method,
                            steps_per_period=args.steps_per_period,

@@ -5,8 +5,8 @@ matplotlib is imported inside each function (and only its object-oriented
 any backend, Agg included.  The convention of :mod:`mechcirc.plotting`:
 multi-panel plots take ``fig=`` (an empty Figure or SubFigure to fill, see
 :func:`mechcirc.plotting.new_panels`; a new constrained-layout Figure by
-default), single-panel ones also ``ax=``; each returns what it drew on and
-never clears or deletes what the caller drew.  Saving is the caller's
+default) or ``ax=`` (their main panel only), single-panel ones ``ax=``; each
+returns what it drew on and never clears or deletes what the caller drew.  Saving is the caller's
 business (the CLI uses :func:`mechcirc.cli._common.save_figure`).  Angles are
 plotted in degrees.
 """
@@ -17,20 +17,19 @@ import math
 
 import numpy as np
 
+from ..plotting import laid_out, new_panels
 from ..units import convert_frequency
 
 __all__ = ["plot_fourbar", "plot_synthesis", "draw_design", "plot_frame_loading", "plot_shaking", "plot_linkage"]
 
 
-def _figure(rows, cols, size, fig, caller: str, **subplots_kw):
+def _figure(rows, cols, size, fig, caller: str, ax=None, **subplots_kw):
     """:func:`mechcirc.plotting.new_panels` with this module's constrained layout."""
-    from ..plotting import new_panels
-
     return new_panels(fig, rows, cols, caller=caller, figsize=size, layout="constrained",
-                      **subplots_kw)
+                      ax=ax, **subplots_kw)
 
 
-def plot_fourbar(fourbar, omega: float | None = None, n: int = 721, *, fig=None):
+def plot_fourbar(fourbar, omega: float | None = None, n: int = 721, *, ax=None, fig=None):
     """φ4, μ, ν (or ε4T = ν ω² when ``omega`` [rad/s] is given) and γ against θ.
 
     Dead centres are marked on every panel when the linkage is a crank-rocker.
@@ -43,21 +42,22 @@ def plot_fourbar(fourbar, omega: float | None = None, n: int = 721, *, fig=None)
         Crank speed [rad/s].
     n : int
         Points over a revolution.
+    ax : matplotlib.axes.Axes, optional
+        Draw only the φ4 panel there (and not use ``fig``).
     fig : matplotlib.figure.Figure or SubFigure, optional
         An empty one to fill with the four panels; a new one by default.
 
     Returns
     -------
-    matplotlib.figure.Figure or matplotlib.figure.SubFigure
-        What it drew on (``fig`` when given, it must be empty; else a new
-        Figure): its four panels stacked.
+    matplotlib Axes, matplotlib.figure.Figure or matplotlib.figure.SubFigure
+        What it drew on: ``ax``, else ``fig`` (empty) or a new Figure.
     """
     lo, hi = fourbar.crank_range()
     th = np.linspace(lo, hi, n)
     th = th if fourbar.crank_rotates_fully else th[1:-1]
     st = fourbar.evaluate(th)              # (no warning at a crossing's 0/0: evaluate's own)
     deg = np.degrees(th)
-    fig, ax = _figure(4, 1, (7, 9), fig, "plot_fourbar")
+    fig, axes = _figure(4, 1, (7, 9), fig, "plot_fourbar", ax)
     acc = st.nu * omega ** 2 if omega else st.nu
     crossings = fourbar.branch_crossings()
     if crossings:
@@ -69,26 +69,26 @@ def plot_fourbar(fourbar, omega: float | None = None, n: int = 721, *, fig=None)
     panels = [(np.degrees(st.phi4), "φ4 [deg]"), (st.mu, "μ = dφ4/dθ [1]"),
               (acc, "ε4T = ν·ω² [rad/s²]" if omega else "ν = d²φ4/dθ² [1/rad]"),
               (np.degrees(st.gamma), "γ [deg]")]
-    for a, (y, label) in zip(ax[:, 0], panels):
+    for a, (y, label) in zip(axes[:, 0], panels):
         a.plot(deg, y, lw=1.4)
         a.set_ylabel(label)
         a.grid(alpha=0.3)
     if fourbar.is_full_turn_crank_rocker:
         for dc, style in zip(fourbar.dead_centres(), ("--", ":")):
-            for a in ax[:, 0]:
+            for a in axes[:, 0]:
                 a.axvline(math.degrees(dc.theta), color="k", ls=style, lw=0.8,
                           label=f"{dc.kind} dead centre")
-        ax[0, 0].legend(loc="best", fontsize="small")
+        axes[0, 0].legend(loc="best", fontsize="small")
     for k, tc in enumerate(crossings):
-        for a in ax[:, 0]:
+        for a in axes[:, 0]:
             a.axvline(math.degrees(tc), color="r", ls="-.", lw=0.8,
                       label="branch crossing (μ, ν undefined)" if k == 0 else None)
     if crossings:
-        ax[1, 0].legend(loc="best", fontsize="small")
-    ax[-1, 0].set_xlabel("crank angle θ [deg]")
+        axes[1, 0].legend(loc="best", fontsize="small")
+    axes[-1, 0].set_xlabel("crank angle θ [deg]")
     fig.suptitle(f"four-bar a={fourbar.crank:g} b={fourbar.coupler:g} c={fourbar.rocker:g} "
                  f"d={fourbar.frame:g} ({fourbar.linkage_type}, branch {fourbar.branch:+d})")
-    return fig
+    return laid_out(False, fig, ax, axes)
 
 
 def draw_design(design, ax):
@@ -129,7 +129,7 @@ def draw_design(design, ax):
     return ax
 
 
-def plot_synthesis(designs, n: int = 721, fig=None):
+def plot_synthesis(designs, n: int = 721, fig=None, *, ax=None):
     """Patent-style figures beside the best design drawn.
 
     Left: ``designs[0]`` at both dead centres with its swing (:func:`draw_design`).
@@ -145,19 +145,23 @@ def plot_synthesis(designs, n: int = 721, fig=None):
         Points of each design's curves over a revolution.
     fig : matplotlib.figure.Figure or SubFigure, optional
         An empty one to fill with both panels; a new one by default.
+    ax : matplotlib.axes.Axes, optional
+        Draw only the best design (:func:`draw_design`) there (nothing else of its
+        figure is touched); ``fig`` is then not used.
 
     Returns
     -------
-    matplotlib.figure.Figure or matplotlib.figure.SubFigure
-        What it drew on (``fig`` when given, it must be empty; else a new
-        Figure): the best design on the left, the curves of all on the right.
+    matplotlib Axes, matplotlib.figure.Figure or matplotlib.figure.SubFigure
+        What it drew on (``ax`` when given; else ``fig``, it must be empty, or a
+        new Figure): the best design on the left, the curves of all on the right.
     """
-    fig, ((left, right),) = _figure(1, 2, (12, 7), fig, "plot_synthesis", width_ratios=(1, 1.3))
+    fig, ((left, right),) = _figure(1, 2, (12, 7), fig, "plot_synthesis", ax,
+                                    width_ratios=(1, 1.3))
     draw_design(designs[0], left)
     grid = right.get_subplotspec().subgridspec(2, 1)
     right.remove()                  # ours, just made: its slot holds two panels
-    ax = [fig.add_subplot(grid[0]), None]
-    ax[1] = fig.add_subplot(grid[1], sharex=ax[0])
+    pn = [fig.add_subplot(grid[0]), None]
+    pn[1] = fig.add_subplot(grid[1], sharex=pn[0])
     for k, des in enumerate(designs):
         fb = des.fourbar()
         front, _ = fb.dead_centres()
@@ -165,44 +169,54 @@ def plot_synthesis(designs, n: int = 721, fig=None):
         st = fb.evaluate(th)
         label = f"#{k + 1}: {des.a:.1f}/{des.b:.1f}/{des.c:.1f}/{des.d:.1f} mm"
         deg = np.degrees(th - front.theta)
-        ax[0].plot(deg, np.degrees(st.gamma), lw=1.2, label=label)
-        ax[1].plot(deg, st.nu, lw=1.2, label=label)
-    ax[0].axhline(45, color="r", ls="--", lw=0.8, label="γ = 45° (eq. 3)")
-    ax[0].set_ylabel("transmission angle γ [deg]")
-    ax[1].set(ylabel="rocker acceleration d²Φ/dθ² [1/rad]",
+        pn[0].plot(deg, np.degrees(st.gamma), lw=1.2, label=label)
+        pn[1].plot(deg, st.nu, lw=1.2, label=label)
+    pn[0].axhline(45, color="r", ls="--", lw=0.8, label="γ = 45° (eq. 3)")
+    pn[0].set_ylabel("transmission angle γ [deg]")
+    pn[1].set(ylabel="rocker acceleration d²Φ/dθ² [1/rad]",
               xlabel="crank angle from the front dead centre [deg]")
-    for a in ax:
+    for a in pn:
         a.grid(alpha=0.3)
-    ax[0].legend(fontsize="small", loc="best")
+    pn[0].legend(fontsize="small", loc="best")
     fig.suptitle("beat-up four-bar synthesis (CN104178888)")
-    return fig
+    return laid_out(False, fig, ax, np.array([[left]]))
 
 
-def plot_frame_loading(result, *, fig=None):
+def plot_frame_loading(result, *, ax=None, fig=None):
     """Shaking force (components and magnitude), driving torque and shaking moments against θ.
 
     Parameters
     ----------
     result : FrameLoading
         Its shaking force, crank torque and shaking moments are drawn.
+    ax : matplotlib.axes.Axes, optional
+        Draw only the shaking force panel there (nothing else of its figure is
+        touched); ``fig`` is then not used.
     fig : matplotlib.figure.Figure or SubFigure, optional
         An empty one to fill (three panels); a new 7 × 8 in one by default.
 
     Returns
     -------
-    matplotlib.figure.Figure or matplotlib.figure.SubFigure
-        What it drew on (``fig`` when given, it must be empty; else a new
-        Figure): its three panels stacked.
+    matplotlib Axes, matplotlib.figure.Figure or matplotlib.figure.SubFigure
+        What it drew on (``ax`` when given; else ``fig``, it must be empty, or a
+        new Figure): its three panels stacked.
     """
-    fig, ax = _figure(3, 1, (7, 8), fig, "plot_frame_loading")
+    fig, axes = _figure(3, 1, (7, 8), fig, "plot_frame_loading", ax)
     S = result.shaking_force
-    _curves(ax[0, 0], result.theta, "shaking force [N]", ("S_x", S[:, 0]), ("S_y", S[:, 1]),
+    _curves(axes[0, 0], result.theta, "shaking force [N]", ("S_x", S[:, 0]), ("S_y", S[:, 1]),
             ("|S|", result.shaking_force_magnitude, "k"))
-    _curves(ax[1, 0], result.theta, "crank torque [N·m]", ("T", result.torque))
-    _curves(ax[2, 0], result.theta, "shaking moment [N·m]", ("T_a (about A)", result.T_a),
+    _curves(axes[1, 0], result.theta, "crank torque [N·m]", ("T", result.torque))
+    _curves(axes[2, 0], result.theta, "shaking moment [N·m]", ("T_a (about A)", result.T_a),
             ("T_d (about D)", result.T_d))
-    ax[2, 0].set_xlabel("crank angle θ [deg]")
-    return fig
+    axes[2, 0].set_xlabel("crank angle θ [deg]")
+    fig.suptitle(_loading_title(result))
+    return laid_out(False, fig, ax, axes)
+
+
+def _loading_title(result) -> str:
+    """The title of a :class:`FrameLoading`'s plots: its crank speed."""
+    return (f"frame loading at ω = {result.omega:.4g} rad/s "
+            f"({convert_frequency(result.omega, 'rad/s', 'rpm'):.4g} rpm)")
 
 
 def _curves(a, theta, ylabel: str, *curves):
@@ -216,7 +230,7 @@ def _curves(a, theta, ylabel: str, *curves):
     a.legend(fontsize="small", loc="best")
 
 
-def plot_shaking(result, fig=None):
+def plot_shaking(result, fig=None, *, ax=None):
     """The patent's Figs. 5–6 for a :class:`FrameLoading`, and the loads behind them.
 
     Four panels: the shaking force S on the frame as a polar curve (the locus
@@ -231,17 +245,20 @@ def plot_shaking(result, fig=None):
         Its shaking force, bearing forces, torque and moments are drawn.
     fig : matplotlib.figure.Figure or SubFigure, optional
         An empty one for the four panels (2 × 2); a new one by default.
+    ax : matplotlib.axes.Axes, optional
+        Draw only the polar curve there (nothing else of its figure is touched);
+        ``fig`` is then not used.
 
     Returns
     -------
-    matplotlib.figure.Figure or matplotlib.figure.SubFigure
-        What it drew on (``fig`` when given, it must be empty; else a new
-        Figure): its four panels in a 2 × 2 grid.
+    matplotlib Axes, matplotlib.figure.Figure or matplotlib.figure.SubFigure
+        What it drew on (``ax`` when given; else ``fig``, it must be empty, or a
+        new Figure): its four panels in a 2 × 2 grid.
     """
-    fig, ax = _figure(2, 2, (10, 8), fig, "plot_shaking")
+    fig, axes = _figure(2, 2, (10, 8), fig, "plot_shaking", ax)
     deg, S = np.degrees(result.theta), result.shaking_force
     mag = result.shaking_force_magnitude
-    a = ax[0, 0]
+    a = axes[0, 0]
     a.plot(S[:, 0], S[:, 1], lw=1.4)
     a.plot([0], [0], "k+", ms=10)
     k = int(np.argmax(mag))
@@ -251,21 +268,20 @@ def plot_shaking(result, fig=None):
     a.set(xlabel="S_x [N]", ylabel="S_y [N]",
           title="shaking force on the frame, polar curve (Fig. 5)")
     a.legend(fontsize="small", loc="best")
-    a = ax[0, 1]
+    a = axes[0, 1]
     a.plot(deg, mag, "k", lw=1.4)
     a.set(ylabel="|S| [N]", title="shaking force magnitude (Fig. 6)")
-    _curves(ax[1, 0], result.theta, "bearing force [N]",
+    _curves(axes[1, 0], result.theta, "bearing force [N]",
             ("|F_A| (crankshaft bearing)", np.hypot(*result.F_A.T)),
             ("|F_D| (rocking-shaft bearing)", np.hypot(*result.F_D.T)))
-    _curves(ax[1, 1], result.theta, "moment [N·m]", ("T (driving torque)", result.torque),
+    _curves(axes[1, 1], result.theta, "moment [N·m]", ("T (driving torque)", result.torque),
             ("T_a (about A)", result.T_a), ("T_d (about D)", result.T_d))
-    for a in (ax[0, 1], ax[1, 0], ax[1, 1]):
+    for a in (axes[0, 1], axes[1, 0], axes[1, 1]):
         a.set_xlabel("crank angle θ [deg]")
-    for a in (ax[0, 0], ax[0, 1]):
+    for a in (axes[0, 0], axes[0, 1]):
         a.grid(alpha=0.3)
-    fig.suptitle(f"frame loading at ω = {result.omega:.4g} rad/s "
-                 f"({convert_frequency(result.omega, 'rad/s', 'rpm'):.4g} rpm)")
-    return fig
+    fig.suptitle(_loading_title(result))
+    return laid_out(False, fig, ax, axes)
 
 
 def plot_linkage(linkage, state, paths=None, *, ax=None, fig=None):
@@ -293,11 +309,8 @@ def plot_linkage(linkage, state, paths=None, *, ax=None, fig=None):
         What it drew on: ``ax`` when given, else ``fig`` (it must be empty) or the
         new Figure.
     """
-    if ax is not None:
-        a = ax
-    else:
-        fig, axes = _figure(1, 1, (7, 7), fig, "plot_linkage")
-        a = axes[0, 0]
+    fig, axes = _figure(1, 1, (7, 7), fig, "plot_linkage", ax)
+    a = axes[0, 0]
     for xy in (paths or {}).values():
         a.plot(xy[:, 0], xy[:, 1], lw=0.8, alpha=0.7)
     for name, pts in linkage.links.items():
@@ -316,4 +329,4 @@ def plot_linkage(linkage, state, paths=None, *, ax=None, fig=None):
     unit = getattr(linkage, "units", "") or "length"
     a.set(xlabel=f"x [{unit}]", ylabel=f"y [{unit}]")
     a.set_title(f"{linkage.name} at θ = {math.degrees(state.theta):.4g}° (first crank)")
-    return a if ax is not None else fig
+    return laid_out(False, fig, ax, axes)

@@ -12,7 +12,7 @@ from ..errors import InputError, MechcircError, did_you_mean
 __all__ = ["plot_mode", "plot_motion"]
 
 
-def plot_motion(result, names=None, fig=None):
+def plot_motion(result, names=None, fig=None, *, ax=None):
     """Accelerations (top) and elastic forces (bottom) against the crank angle.
 
     Parameters
@@ -25,14 +25,17 @@ def plot_motion(result, names=None, fig=None):
     fig : matplotlib Figure or SubFigure, optional
         An empty figure to draw the panels in (:func:`mechcirc.plotting.new_panels`);
         by default a new one.
+    ax : matplotlib.axes.Axes, optional
+        Draw only the accelerations there (nothing else of its figure is touched);
+        ``fig`` is then not used.
 
     Returns
     -------
-    matplotlib.figure.Figure or matplotlib.figure.SubFigure
-        ``fig`` (it must be empty) or the new Figure: accelerations above, forces and
-        moments below, against the crank angle.
+    matplotlib Axes, matplotlib.figure.Figure or matplotlib.figure.SubFigure
+        ``ax`` when given, else ``fig`` (it must be empty) or the new Figure:
+        accelerations above, forces and moments below, against the crank angle.
     """
-    from ..plotting import new_panels
+    from ..plotting import laid_out, new_panels
 
     if names is None:
         names = [k for k, v in result.values.items()
@@ -42,20 +45,21 @@ def plot_motion(result, names=None, fig=None):
         raise InputError(f"no output {unknown[0]!r}{did_you_mean(unknown[0], result.values)} "
                          f"(outputs: {', '.join(result.values)})")
     deg = np.degrees(result.crank_angle)
-    fig, ((top,), (bottom,)) = new_panels(fig, 2, caller="plot_motion", figsize=(8, 7), sharex=True)
+    fig, axes = new_panels(fig, 2, caller="plot_motion", figsize=(8, 7), sharex=True, ax=ax)
+    (top,), (bottom,) = axes
     for n in names:
-        ax = bottom if n.endswith((".force", ".moment", ".deformation")) else top
-        ax.plot(deg, result.values[n], lw=0.8, label=n)
+        panel = bottom if n.endswith((".force", ".moment", ".deformation")) else top
+        panel.plot(deg, result.values[n], lw=0.8, label=n)
     top.set_ylabel("angular acceleration [rad/s²]")
     bottom.set_ylabel("force [N] or moment [N·m]")
     bottom.set_xlabel("crank angle [deg]")
-    for ax in (top, bottom):
-        if ax.lines:
-            ax.legend(loc="upper right", fontsize=7)
-        ax.grid(alpha=0.3)
+    for panel in (top, bottom):
+        if panel.lines:
+            panel.legend(loc="upper right", fontsize=7)
+        panel.grid(alpha=0.3)
     top.set_title(f"{result.name}: revolution {result.revolution} at Ω = {result.omega:g} rad/s",
                   fontsize=10)
-    return fig
+    return laid_out(False, fig, ax, axes)
 
 
 def plot_mode(scene, theta: float, n: int = 1, *, kind: str = "resonance", ax=None,

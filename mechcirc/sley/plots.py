@@ -7,7 +7,7 @@ import math
 __all__ = ["plot_result"]
 
 
-def plot_result(result, fig=None):
+def plot_result(result, fig=None, *, ax=None):
     """ε2P, ε4P with ε4T, and M2V (M5V, ε5P for both sides) against crank angle.
 
     Parameters
@@ -16,33 +16,36 @@ def plot_result(result, fig=None):
         A simulated sley (:func:`mechcirc.sley.simulate`).
     fig : matplotlib Figure or SubFigure, optional
         An empty one to fill (:func:`mechcirc.plotting.new_panels`); a new one by default.
+    ax : matplotlib.axes.Axes, optional
+        Draw only the crank accelerations there (nothing else of its figure is
+        touched); ``fig`` is then not used.
 
     Returns
     -------
-    matplotlib.figure.Figure or matplotlib.figure.SubFigure
-        What it drew on: ``fig`` when given (it must be empty), else the new Figure.
+    matplotlib Axes, matplotlib.figure.Figure or matplotlib.figure.SubFigure
+        What it drew on: ``ax`` when given, else ``fig`` (it must be empty) or the new Figure.
     """
     import numpy as np
-    from ..plotting import new_panels
+    from ..plotting import laid_out, new_panels
 
-    fig, axes = new_panels(fig, 3, caller="plot_result", figsize=(8, 9), sharex=True)
-    axes, deg = axes[:, 0], np.degrees(result.crank_angle)
+    fig, grid = new_panels(fig, 3, caller="plot_result", figsize=(8, 9), sharex=True, ax=ax)
+    axes, deg = grid[:, 0], np.degrees(result.crank_angle)
     # the cranks' panels: crank 2P, and crank 5P when there is one (both sides)
-    for ax, ylabel, curves in (
+    for panel, ylabel, curves in (
             (axes[0], "crank acceleration [rad/s²]",
              (("ε2P (crank 2P)", result.eps2P), ("ε5P (crank 5P)", result.eps5P))),
             (axes[2], "driving moment [N·m]", (("M2V", result.M2V), ("M5V", result.M5V)))):
         for label, y in curves:
             if y is not None:
-                ax.plot(deg, y, lw=0.8, label=label)
-        ax.set_ylabel(ylabel)
-    ax = axes[1]
-    ax.plot(deg, result.eps4P, lw=0.8, label="ε4P (sley)")
-    ax.plot(deg, result.eps4T, lw=1.2, ls="--", color="k", label="ε4T = ν ω² (rigid)")
-    ax.axvspan(math.degrees(result.phiP - result.params.alpha / 2),
+                panel.plot(deg, y, lw=0.8, label=label)
+        panel.set_ylabel(ylabel)
+    panel = axes[1]
+    panel.plot(deg, result.eps4P, lw=0.8, label="ε4P (sley)")
+    panel.plot(deg, result.eps4T, lw=1.2, ls="--", color="k", label="ε4T = ν ω² (rigid)")
+    panel.axvspan(math.degrees(result.phiP - result.params.alpha / 2),
                math.degrees(result.phiP + result.params.alpha / 2), color="0.9",
                label=f"beat-up window (α = {result.alpha_deg:g}°)")
-    ax.set_ylabel("sley acceleration [rad/s²]")
+    panel.set_ylabel("sley acceleration [rad/s²]")
     axes[2].set_xlabel("crank angle φ2 [deg]")
     axes[2].set_xlim(0, 360)
     p = result.params
@@ -52,4 +55,4 @@ def plot_result(result, fig=None):
     for a in axes:
         a.legend(loc="upper right", fontsize=8)
         a.grid(alpha=0.3)
-    return fig
+    return laid_out(False, fig, ax, grid)
