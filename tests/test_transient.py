@@ -759,3 +759,16 @@ def test_a_scalar_only_drive_function_is_sampled_point_by_point_and_checked():
         Waveform("callable").sample(np.zeros(2), 1.0)
     with pytest.raises(ValueError, match="a 'motion' waveform needs motion"):
         Waveform("motion", omega=2.0).sample(np.zeros(2), 1.0)
+
+
+def test_crosscheck_steady_line_without_a_finite_drive_error_cannot_be_measured():
+    """A new-user pass (session 28): masses 1e300 and 1e-300 make the transient's error
+    of the drive force overflow (drive_error None); the steady lines raised AssertionError
+    (an internal error, exit 1).  They now say the line cannot be measured, and the lines
+    whose error is finite are still compared."""
+    net = mechcirc.parse("drive V a 0 velocity=1\nmass m a 0 1e300\nspring k a b 1e-300\n"
+                         "mass m2 b 0 1e-300\n")
+    cc = crosscheck(net)
+    unmeasured = [r for r in cc.steady_state if "not finite" in (r["why"] or "")]
+    assert unmeasured and all(r["verdict"] == "cannot be measured" for r in unmeasured)
+    assert any(r["verdict"] == "agrees" for r in cc.steady_state)

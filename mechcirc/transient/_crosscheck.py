@@ -331,8 +331,10 @@ def _steady(circuit: Circuit, omegas: list, sweep, out: CrossCheck, progress) ->
         assert y is not None            # a driven circuit's run has the drive's output
         t = run.time
         # the time domain's own error of y: its propagation (the run's drive_error: heavily
-        # weighted small states), and the rounding of forming it
-        assert run.drive_error is not None      # (an exact, harmonic drive)
+        # weighted small states; None where not finite), and the rounding of forming it
+        if run.drive_error is None:
+            judge(row, None, tol, "the transient's error of the drive's output is not finite")
+            continue
         tol = max(tol, (run.drive_error + _row_rounding(circuit, w, d.amplitude)) / exp)
         measured, departure = fit_sinusoid(t, y, w)
         row["measured"] = float(measured)
