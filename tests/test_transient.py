@@ -772,3 +772,19 @@ def test_crosscheck_steady_line_without_a_finite_drive_error_cannot_be_measured(
     unmeasured = [r for r in cc.steady_state if "not finite" in (r["why"] or "")]
     assert unmeasured and all(r["verdict"] == "cannot be measured" for r in unmeasured)
     assert any(r["verdict"] == "agrees" for r in cc.steady_state)
+
+
+@pytest.mark.parametrize("m_driven", ["1e11", "1e12", "1e15", "1e20"])
+def test_a_heavy_velocity_driven_mass_leaves_the_spring_behind_it(m_driven):
+    """New-user pass, session 28: the mass at a velocity-driven node plays no part, yet
+    from 1e12 kg the 1 kg mass behind the drive's spring moved rigidly with the drive
+    (spring force 0): the rigid-part test of the particular motion, and the massless
+    test of the free directions, were relative to the driven mass.  Against the closed
+    form of a velocity step: x_b = t − sin(ω t)/ω, ω = √(k/m)."""
+    net = mechcirc.parse(f"drive V a 0 velocity=1\nspring k a b 1e3\nmass m2 b 0 1\n"
+                         f"mass m1 a 0 {m_driven}\n")
+    r = transient(net, 0.5, 1e-3, "step")
+    t, w = r.time, math.sqrt(1e3)
+    b = r.nodes.index("b")
+    np.testing.assert_allclose(r.x[:, b], t - np.sin(w * t) / w, rtol=0, atol=2e-14)
+    np.testing.assert_allclose(r.drive_force, 1e3 * np.sin(w * t) / w, rtol=0, atol=3e-12)
