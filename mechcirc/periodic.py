@@ -126,6 +126,9 @@ class PeriodicResult:
         Harmonics exactly on an undamped resonance (the force is infinite).
     forces, velocities : dict of str to ndarray
         Each asked-for element's force [N] and velocity difference [m/s] over θ.
+    element_peaks : dict of str to (float, float)
+        Each asked-for element's max |force| over the cycle [N], located exactly as
+        ``peak`` is (not the largest sample of ``forces``), and its θ [deg].
     notes : tuple of str
     units : dict of str to str
         The unit labels of the drive (:func:`mechcirc.circuit.units_of`): N, m,
@@ -161,6 +164,7 @@ class PeriodicResult:
     velocities: dict = field(default_factory=dict)
     notes: tuple = ()
     units: dict = field(default_factory=lambda: units_of(None))
+    element_peaks: dict = field(default_factory=dict)
 
     @property
     def harmonics(self) -> int:
@@ -568,7 +572,7 @@ def _at_angles(circuit, motion, rpm, solved, points: int, elements, near: float,
     nearest, distance, unbounded = _nearest(found, w, V, Qk)
     theta = 2 * np.pi * np.arange(points) / points
     x, dx, _ = motion.evaluate(theta)
-    forces, velocities = {}, {}
+    forces, velocities, element_peaks = {}, {}, {}
     ks = sorted(int(i) for i in unbounded)
     if ks:
         notes.append("harmonic(s) " + ", ".join(
@@ -584,6 +588,8 @@ def _at_angles(circuit, motion, rpm, solved, points: int, elements, near: float,
         for name in names:
             f, u = responses(name)
             forces[name], velocities[name] = _on_grid(f[0], points), _on_grid(u[0], points)
+            top, at = _peaks(f[0])
+            element_peaks[name] = (float(top[0]), math.degrees(at[0]))
     near_mask = np.abs(np.nan_to_num(distance, nan=np.inf)) <= near
     return PeriodicResult(
         name=circuit.name, rpm=float(rpm), omega_shaft=Omega, angle_deg=np.degrees(theta),
@@ -592,7 +598,7 @@ def _at_angles(circuit, motion, rpm, solved, points: int, elements, near: float,
         peak=peak, peak_angle_deg=math.degrees(peak_theta), error=error, tol=tol,
         unbounded=tuple(ks), near_fraction=near,
         forces=forces, velocities=velocities, notes=tuple(notes),
-        units=units_of(circuit.drive))
+        units=units_of(circuit.drive), element_peaks=element_peaks)
 
 
 def _peak_or_inf(Qk, unbounded):

@@ -150,8 +150,8 @@ def _one_speed(args, circuit, elements, motion) -> int:
     if r.harmonics > top.size:
         print(f"  (the {top.size} largest of {r.harmonics} harmonics; --json lists all)")
     for name in elements:
-        if (f := r.forces.get(name)) is not None:
-            print(f"  element {name}: peak |force| {np.max(np.abs(f)):.6g} {unit}")
+        if (top := r.element_peaks.get(name)) is not None:
+            print(f"  element {name}: peak |force| {top[0]:.6g} {unit} at θ = {top[1]:.4f} deg")
     print_written(("CSV", args.output), ("plot", args.plot), notes=r.notes)
     return 0
 
@@ -172,6 +172,8 @@ def _print_one_speed_json(args, r) -> int:
                        "harmonics": rows,
                        "resonances": [{"omega": w, "zeta": z} for w, z in r.resonances],
                        "unbounded": list(r.unbounded), "forces": r.forces,
+                       "element_peaks": {n: {"peak": p, "angle_deg": a}
+                                         for n, (p, a) in r.element_peaks.items()},
                        "velocities": r.velocities, "notes": list(r.notes)})
 
 
@@ -201,8 +203,8 @@ def _speed_map(args, circuit, elements, motion) -> int:
     if finite.any():
         lo, hi = np.argmin(np.where(finite, m.peak, np.inf)), np.argmax(
             np.where(finite, m.peak, -np.inf))
-        print(f"  smallest peak {m.peak[lo]:.6g} {unit} at {m.rpm[lo]:.6g} rpm; largest "
-              f"{m.peak[hi]:.6g} {unit} at {m.rpm[hi]:.6g} rpm")
+        print(f"  on the speed grid: smallest peak {m.peak[lo]:.6g} {unit} at {m.rpm[lo]:.6g} "
+              f"rpm; largest {m.peak[hi]:.6g} {unit} at {m.rpm[hi]:.6g} rpm")
     strong = [c for c in crossings if c["weight"] >= 1e-3]
     print(f"  speeds where a harmonic meets a resonance (k·Ω = ωn; {len(strong)} of "
           f"{len(crossings)} with a harmonic of at least 1e-3 of the drive velocity)"
