@@ -31,6 +31,7 @@ periodic CAM --rpm-min 100 --rpm-max 1200 --angles 90 | --angles applies to one 
 periodic CAM --rpm-min 100 --rpm-max 1200 --near 0.1 | --near applies to one speed | give --rpm
 transient STB --t-end 0.01 --amplitude 2 | --amplitude applies to | add --waveform
 transient STB --t-end 0.01 --waveform rest --amplitude 2 | --amplitude applies to | add --waveform
+transient STB --t-end 0.01 --waveform step --rtol 5 | --rtol applies to netlists with a clearance |
 scene SCENE --theta 40 --points 10 | --points applies to --cycle | add --cycle
 scene SCENE --theta 40 --harmonics 3 | --harmonics applies to --cycle | add --cycle
 study STUDY --connect-timeout 5 | --connect-timeout applies to a --scheduler | add --scheduler

@@ -6,7 +6,7 @@ import math
 import sys
 
 from ..units import in_unit
-from ._common import (add_command, add_handler, add_output_option, add_plot_option,
+from ._common import (Default, add_command, add_handler, add_output_option, add_plot_option,
                       check_names, check_output_paths, frequency_symbol, print_json,
                       print_written, real, refuse_ignored, shaft_speed, write_outputs)
 
@@ -40,7 +40,7 @@ def register(sub) -> None:
                         "for such a drive")
     p.add_argument("--amplitude", type=real(), metavar="A",
                    help="amplitude of harmonic/step/impulse (default: the netlist's)")
-    p.add_argument("--rtol", type=real(above=0.0), default=1e-10, metavar="TOL",
+    p.add_argument("--rtol", type=real(above=0.0), default=Default(1e-10), metavar="TOL",
                    help="relative tolerance with clearances, 1e-12 to 0.1 (default 1e-10; "
                         "the absolute one is TOL x each state's peak)")
     add_output_option(p, "write the time series as CSV")
@@ -54,6 +54,7 @@ def register(sub) -> None:
 def cmd_transient(args) -> int:
     from ..netlist import load
     from ..transient import parse_waveform, transient
+    from ..transient.model import backlash_elements
 
     check_output_paths(args.output, plots=(args.plot,), reads=(args.file,), table="a CSV table")
     wave = None if args.waveform is None else parse_waveform(args.waveform)   # read once
@@ -63,6 +64,8 @@ def cmd_transient(args) -> int:
                                           "harmonic:OMEGA, step or impulse"),
                           "--element": (args.plot, "a panel of the --plot", "add --plot IMAGE")})
     circuit = load(args.file, require_drive=False)
+    refuse_ignored(args, {"--rtol": (bool(backlash_elements(circuit)), "netlists with a "
+                                     "clearance (backlash=); without one the run is exact", "")})
     check_names(args.element, [e.name for e in circuit.elements])   # before the run
     result = transient(circuit, args.t_end, args.dt, wave, amplitude=args.amplitude,
                        rtol=args.rtol, rpm=args.rpm)
