@@ -70,6 +70,22 @@ def test_sweep_touchstone_round_trip(tmp_path, capsys):
     assert np.max(np.abs(net.z[:, 0, 0] - K) / np.abs(K)) < 1e-12
 
 
+def test_a_rotary_sweep_says_its_unit_in_the_file_and_the_network(tmp_path, capsys):
+    """New-user pass, session 28: the Touchstone header of a rotary netlist said
+    m/(N*s); K is in rad/(N·m·s) there (the sweep's own summary says so)."""
+    src = tmp_path / "rotor.mcir"
+    src.write_text("drive W p 0 velocity=2 rad/s\nspring kt p a 5000 N*m/rad\n"
+                   "mass J a 0 0.05 kg*m^2\ndamper ct a 0 0.5 N*m*s/rad\n")
+    out = tmp_path / "rot.s1p"
+    status, _, err = run(["sweep", src, "--omega-min", 1, "--omega-max", 1000, "--points", 20,
+                          "--touchstone", out], capsys)
+    assert status == 0, err
+    head = out.read_text().splitlines()[1:3]
+    assert all("rad/(N*m*s)" in line and "m/(N*s)" not in line for line in head), head
+    net = mechcirc.load(src).sweep(np.geomspace(1, 1e3, 20)).to_skrf()
+    assert "rad/(N*m*s)" in net.name and "K = v/Q in rad/(N*m*s)" in net.comments
+
+
 def test_reference_mobility_is_a_power_of_two_near_the_data():
     assert reference_mobility([1e-3, 1e-5]) == 2.0 ** round(math.log2(1e-4))
     assert reference_mobility([np.inf, 0.0]) == 1.0

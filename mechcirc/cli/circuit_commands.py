@@ -316,7 +316,8 @@ def _write_sweep_outputs(args, result, extra, sens, found, pk) -> int:
             from ..interop.skrf import write_touchstone
 
             dropped = write_touchstone(out.path(args.touchstone), result.omega, result.K,
-                                       name=result.name)
+                                       name=result.name,
+                                       unit=result.units["K"].replace("·", "*"))
         if args.plot:
             from ..plotting import plot_sweep
 

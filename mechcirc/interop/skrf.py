@@ -42,8 +42,9 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["to_skrf", "two_port", "two_port_z", "write_touchstone", "read_mobility",
            "compare", "Comparison", "reference_mobility", "MOBILITY_NOTE"]
 
-#: The sentence every network and file carries about its unit.
-MOBILITY_NOTE = ("mechanical mobility K = v/Q in m/(N*s) (mobility analogy: force ~ current, "
+#: The sentence every network and file carries about its unit (``{unit}``: m/(N*s), or
+#: rad/(N*m*s) for a rotary drive).
+MOBILITY_NOTE = ("mechanical mobility K = v/Q in {unit} (mobility analogy: force ~ current, "
                  "velocity ~ voltage), NOT ohms")
 
 
@@ -96,32 +97,40 @@ def to_skrf(sweep: "Sweep", *, z0: float | None = None):
     """
     return _network(np.asarray(sweep.omega, dtype=float),
                     np.asarray(sweep.K, dtype=complex).reshape(-1, 1, 1), z0, sweep.name,
-                    f"{sweep.name} mobility K [m/(N*s)]",
-                    "no sweep point has ω > 0 and a finite K; nothing to convert")
+                    f"{sweep.name} mobility K [{_ascii(sweep.units['K'])}]",
+                    "no sweep point has ω > 0 and a finite K; nothing to convert",
+                    unit=_ascii(sweep.units["K"]))
 
 
-def _network(omega, Z, z0, name: str, title: str, empty: str, extra: tuple = ()):
+def _network(omega, Z, z0, name: str, title: str, empty: str, extra: tuple = (),
+             unit: str = "m/(N*s)"):
     """The points of Z(ω) with ω > 0 and finite Z as an ``skrf.Network`` called ``title``,
     with the unit's comments (and the lines ``extra``); ``empty`` is the error's
     message when there is none."""
     import skrf
 
     keep, R, dropped = _kept(omega, Z, z0, empty)
-    comments = [*_comments(name, dropped, R), *extra]
+    comments = [*_comments(name, dropped, R, unit), *extra]
     freq = skrf.Frequency.from_f(in_unit(omega[keep], "Hz"), unit="hz")
     return skrf.Network.from_z(Z[keep], frequency=freq, z0=R, name=title,
                                comments="\n".join(comments))
 
 
-def _comments(name: str, dropped: int, R: float) -> list[str]:
-    return [f"mechcirc: {name}", MOBILITY_NOTE,
-            f"reference R = {R!r} m/(N*s) (a power of two, for precision); "
+def _ascii(unit: str) -> str:
+    """A unit label as Touchstone's ASCII comments write it: rad/(N·m·s) → rad/(N*m*s)."""
+    return unit.replace("·", "*")
+
+
+def _comments(name: str, dropped: int, R: float, unit: str) -> list[str]:
+    return [f"mechcirc: {name}", MOBILITY_NOTE.format(unit=unit),
+            f"reference R = {R!r} {unit} (a power of two, for precision); "
             "frequency f = omega/(2*pi) in Hz"] + \
         ([f"{dropped} point(s) with omega <= 0 or a non-finite K left out"] if dropped else [])
 
 
 def write_touchstone(path: str | os.PathLike, omega: ArrayLike, Z: ArrayLike, *,
-                     name: str = "circuit", R: float | None = None) -> int:
+                     name: str = "circuit", R: float | None = None,
+                     unit: str = "m/(N*s)") -> int:
     """Write Z parameters [m/(N·s)] over ``omega`` [rad/s] as a Touchstone v1 file.
 
     ``Z`` has shape (n,) for a one-port or (n, p, p) for a p-port; the file
@@ -142,6 +151,8 @@ def write_touchstone(path: str | os.PathLike, omega: ArrayLike, Z: ArrayLike, *,
         The file's comment line.
     R : float, optional
         Reference mobility (:func:`reference_mobility` when None).
+    unit : str
+        The unit of Z named in the comments (ASCII: ``"rad/(N*m*s)"`` for a rotary drive).
 
     Returns
     -------
@@ -157,7 +168,7 @@ def write_touchstone(path: str | os.PathLike, omega: ArrayLike, Z: ArrayLike, *,
     keep, R, dropped = _kept(omega, Z, R, "no point has ω > 0 and a finite K; nothing to write")
     p = Z.shape[1]
     with atomic_open(path, "w", encoding="ascii") as fh:
-        for line in _comments(name, dropped, R):
+        for line in _comments(name, dropped, R, unit):
             fh.write(f"! {line}\n")
         fh.write(f"# Hz Z RI R {R!r}\n")
         for w, z in zip(omega[keep], Z[keep] / R):
