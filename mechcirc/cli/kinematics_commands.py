@@ -285,9 +285,10 @@ def cmd_frame(args) -> int:
               "add --reed-force FX,FY")
     refuse_ignored(args, {"--reed-point": shaped, "--beat-window": shaped,
                           "--reed-force": (True, "", "")})     # (its default)
+    lengths = (args.crank, args.coupler, args.rocker, args.frame)
+    FourBar(*lengths, branch=args.branch)       # refused (if it is) in the lengths typed
     k = 1e-3 if args.unit == "mm" else 1.0            # to metres
-    fb = FourBar(args.crank * k, args.coupler * k, args.rocker * k, args.frame * k,
-                 branch=args.branch)
+    fb = FourBar(*(x * k for x in lengths), branch=args.branch)
     if not fb.is_full_turn_crank_rocker:
         raise MechcircError(
             f"frame loading needs a crank-rocker whose crank turns fully; this four-bar is a "

@@ -42,6 +42,15 @@ def test_fourbar_impossible_geometry_exit_2(capsys):
     assert "cannot be assembled" in err and "frame" in err
 
 
+def test_frame_impossible_geometry_names_the_lengths_as_typed(capsys):
+    """New-user pass, session 28: ``frame`` reported 0.4 and 0.2484 (metres, no unit)
+    for lengths typed in mm (400, 248.4 as ``fourbar`` says)."""
+    assert main(["frame", "--crank", "35", "--coupler", "57.8", "--rocker", "155.6",
+                 "--frame", "400", "--rpm", "600", "--mass", "2,1.5,15"]) == 2
+    err = capsys.readouterr().err
+    assert "the frame (400) is not shorter" in err and "(248.4)" in err
+
+
 def test_synth_json_matches_api(capsys, tmp_path):
     png = tmp_path / "s.png"
     status, doc = _json(capsys, ["synth", "--load", "heavy", "--swing", "25", "--limit", "3",
