@@ -45,7 +45,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .circuit import Circuit, units_of
-from .errors import MechcircError
+from .errors import MechcircError, NetlistError
 from .sources import brief, positive_number, quantity_frame, real_number, summary_repr
 from .units import convert_frequency
 
@@ -260,10 +260,11 @@ def _prepared(circuit: Circuit, motion):
     if motion is None:
         motion = drive.motion
         if motion is None:
-            raise MechcircError(
-                f"drive {drive.name!r} has no motion over the revolution; give it one: "
-                "'drive NAME N1 N2 motion=lift.csv' or 'motion=cycloidal rise=120 dwell=60 "
-                "return=120 stroke=0.05' (docs/netlist.md)")
+            raise NetlistError(
+                f"drive {drive.name!r} has no motion over the revolution",
+                circuit.source or "<string>", drive.line, drive.col,
+                "a motion: 'drive NAME N1 N2 motion=lift.csv' or 'motion=cycloidal rise=120 "
+                "dwell=60 return=120 stroke=0.05' (docs/netlist.md)")
     if not hasattr(motion, "fourier"):
         raise MechcircError(f"motion must be a Motion (mechcirc.motion_laws.cam_cycle or "
                             f"read_motion_table), got {brief(motion)}")

@@ -95,8 +95,23 @@ def test_bad_tables_from_the_netlist(tmp_path, capsys, body, where, needle):
 
 
 def test_drive_without_motion(capsys):
+    """Located at the drive's line (new-user pass, session 28: no file, no line)."""
     assert_user_error(["periodic", EXAMPLES / "drive.mcir", "--rpm", "600"], capsys,
-                      "has no motion")
+                      "drive.mcir:3:1: error: drive 'V0' has no motion", "expected a motion")
+
+
+def test_a_rotary_drive_names_its_stroke_unit_and_the_table_its_frequency_unit(tmp_path,
+                                                                                capsys):
+    """New-user pass, session 28: the header showed stroke=0.3490658503988659 (20 deg, in
+    rad) with no unit, and with --unit Hz the 'nearest ωn' column had none."""
+    net = tmp_path / "rcam.mcir"
+    net.write_text("drive W p 0 motion=modified_sine rise=80 dwell=20 return=80 stroke=20 deg\n"
+                   "mass J1 p 0 0.02 kg*m^2\nspring kt p a 3000 N*m/rad\n"
+                   "mass J2 a 0 0.15 kg*m^2\ndamper ct a 0 1.2 N*m*s/rad\n")
+    status, text, err = run(["periodic", net, "--rpm", "300", "--unit", "Hz"], capsys)
+    assert status == 0, err
+    assert "stroke=0.3490658503988659 (stroke in rad) at 300 rpm" in text
+    assert "nearest ωn [Hz]" in text
 
 
 @pytest.mark.parametrize("rise", ["1e-320", "5e-324"])

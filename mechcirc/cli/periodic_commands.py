@@ -123,7 +123,9 @@ def _one_speed(args, circuit, elements, motion) -> int:
     if args.json:
         return _print_one_speed_json(args, r)
     d = circuit.drive
-    print(f"{args.file}: drive {d.name} {(motion or d.motion).spec} at {r.rpm:g} rpm "
+    spec = (motion or d.motion).spec
+    spec += f" (stroke in {r.units['x']})" if "stroke=" in spec else ""
+    print(f"{args.file}: drive {d.name} {spec} at {r.rpm:g} rpm "
           f"(Ω = {in_unit(r.omega_shaft, fu):.6g} {fu})")
     print(f"  {r.harmonics} harmonics; estimated error {r.error:.2g} of the peak "
           f"(asked {r.tol:g}); forces about their mean (no static preload)")
@@ -141,10 +143,10 @@ def _one_speed(args, circuit, elements, motion) -> int:
         print(f"  no harmonic within {args.near:.0%} of a resonance")
     top = np.argsort(-np.nan_to_num(np.abs(r.amplitude), nan=np.inf))[:8]
     print(f"  {'k':>5} {f'kΩ [{fu}]':>12} {f'|V_k| [{vu}]':>12} {f'|Q_k| [{unit}]':>12} "
-          f"{'nearest ωn':>12} {'distance':>9}")
+          f"{f'nearest ωn [{fu}]':>17} {'distance':>9}")
     for i in sorted(top):           # (no resonance known: dashes, not "nan +nan%")
-        res = (f"{'—':>12} {'—':>9}" if np.isnan(r.nearest[i]) else
-               f"{in_unit(r.nearest[i], fu):>12.6g} {r.distance[i]:>+9.2%}")
+        res = (f"{'—':>17} {'—':>9}" if np.isnan(r.nearest[i]) else
+               f"{in_unit(r.nearest[i], fu):>17.6g} {r.distance[i]:>+9.2%}")
         print(f"  {r.k[i]:>5} {in_unit(r.omega[i], fu):>12.6g} {abs(r.V[i]):>12.4g} "
               f"{abs(r.amplitude[i]):>12.4g} {res}")
     if r.harmonics > top.size:
