@@ -330,13 +330,10 @@ def solve_eq10(swing: float, b_a: float, *, c_a: float | None = None,
             continue
         x = math.sqrt(float(u))
         c, d = (x, given) if c_a is None else (given, x)
-        try:
+        with contextlib.suppress(GeometryError):
             fb = FourBar(1.0, b_a, c, d)
-            ok = fb.is_full_turn_crank_rocker and abs(fb.swing() - swing) <= tol
-        except GeometryError:
-            ok = False
-        if ok:
-            roots.append(x)
+            if fb.is_full_turn_crank_rocker and abs(fb.swing() - swing) <= tol:
+                roots.append(x)
     return tuple(sorted(set(roots)))
 
 
