@@ -158,11 +158,6 @@ def _crank_speed(omega) -> float:
     return float(omega)
 
 
-def _acute(angle):
-    """Acute angle [rad] between two lines that meet at ``angle`` (any real)."""
-    return np.arctan2(np.abs(np.sin(angle)), np.abs(np.cos(angle)))
-
-
 def _wrap(x):
     """Wrap an angle to [−π, π)."""
     return (x + math.pi) % TWO_PI - math.pi
@@ -561,9 +556,9 @@ class FourBar:
             t = math.acos(cth)
             return tuple(sorted({round(t % TWO_PI, 15), round((-t) % TWO_PI, 15)}))
 
-        def gamma_at(bd):
-            cd = max(-1.0, min(1.0, (b * b + c * c - bd * bd) / (2 * b * c)))
-            return float(_acute(math.acos(cd)))
+        def gamma_at(bd):       # the acute angle between coupler and rocker
+            bcd = math.acos(max(-1.0, min(1.0, (b * b + c * c - bd * bd) / (2 * b * c))))
+            return float(np.arctan2(np.abs(np.sin(bcd)), np.abs(np.cos(bcd))))
 
         g_lo, g_hi = gamma_at(bd_lo), gamma_at(bd_hi)
         candidates = [(g_lo, thetas_for(bd_lo)), (g_hi, thetas_for(bd_hi))]
