@@ -98,8 +98,8 @@ def _register_crosscheck(sub) -> None:
         sub, "crosscheck", "a netlist, scene or sley preset's circuit against its time domain",
         "(a) resonances (K = 0) of the sley's netlist at crank angle theta against the "
         "eigenfrequencies of the linearised equations; (b) ringing of the sley after the beat-up "
-        "pulse against the predicted damped frequency; (c) harmonic forcing of the linear model "
-        "against |Q0|.",
+        "pulse against the predicted damped frequency; (c) harmonic forcing of the netlist in "
+        "time (its periodic steady state) against |Q0| of its sweep.",
         "Example: mechcirc crosscheck --drive one-side --variant 3 --theta 60\n"
         "         mechcirc crosscheck examples/heald_scene.toml --theta 40\n"
         "         mechcirc crosscheck netlists/stb_heald.mcir --omega-max 5000\n"
@@ -320,7 +320,7 @@ def _print_sley_crosscheck(doc: dict, u: str = "rad/s") -> None:
               f"{in_unit(ring['omega_predicted'], u):.3f} {u}, difference "
               f"{ring['rel_error']:.2e}: {verdict_text(ring)}")
     print_written(notes=ring["notes"], indent="    ")
-    print("(c) harmonic forcing of the linear model, |Q0|/V0 [N m s/rad]"
+    print("(c) harmonic forcing of the netlist in time, |Q0|/V0 [N m s/rad]"
           + ("" if u == "rad/s" else f" at {FREQUENCY_UNITS[u][0]} [{u}]"))
     for row in doc["harmonic"]["rows"]:
         print(f"    {FREQUENCY_UNITS[u][0]} {in_unit(row['omega'], u):10.3f}: time domain "

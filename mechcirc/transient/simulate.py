@@ -25,7 +25,7 @@ import numpy as np
 import scipy.linalg as la
 
 from ..circuit import Circuit, units_of
-from ..errors import MechcircError, NetlistError
+from ..errors import MechcircError, NetlistError, SolverError
 from ..sources import positive_number
 from .model import StateSpace, backlash_elements, drive_map, incidence, state_space
 from .propagate import drive_gain, kernels, map_error, propagate_linear
@@ -307,7 +307,7 @@ def periodic_start(ss: StateSpace, drive: Waveform, amp: float, circuit, lineari
         if not np.all(np.isfinite(Z)):
             raise la.LinAlgError
     except (la.LinAlgError, la.LinAlgWarning, ValueError):
-        raise MechcircError(f"no periodic steady state at ω = {drive.omega:g} rad/s: it is a "
+        raise SolverError(f"no periodic steady state at ω = {drive.omega:g} rad/s: it is a "
                             "natural frequency of an undamped part of the network "
                             "(iωI − A is singular)") from None
     return amp * Z.imag

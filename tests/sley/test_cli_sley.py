@@ -127,7 +127,7 @@ def test_crosscheck_disagreement_exits_3(monkeypatch, capsys, cli_once):
     status, out, _ = cli_once(["crosscheck", "--variant", "1", "--json"])
     assert status == 0
     real = {r["omega"]: r["q0_time"] for r in json.loads(out)["harmonic"]["rows"]}
-    monkeypatch.setattr(sc, "forced_amplitude", lambda lin, w: 1.01 * real[float(w)])
+    monkeypatch.setattr(sc, "forced_amplitude", lambda circuit, w: 1.01 * real[float(w)])
     assert main(["crosscheck", "--variant", "1", "--json"]) == 3
     doc = json.loads(capsys.readouterr().out)
     assert doc["verdict"] == "disagrees" and doc["summary"]["disagree"] == 3
