@@ -805,7 +805,7 @@ class _Parser:
                            SYNTAX["drive"])
         text = tok.text
         if text not in LAWS and "." not in text and "/" not in text and os.sep not in text:
-            line.error(f"unknown motion law {text!r}", tok.col,
+            line.error(f"unknown motion law {text!r}{did_you_mean(text, LAWS)}", tok.col,
                        "one of " + ", ".join(LAWS) + ", or a table file such as lift.csv")
         if text in LAWS:
             return self._motion_law(line, opts, units, tok)
@@ -858,7 +858,8 @@ class _Parser:
         if "return_law" in opts:
             ret_law = opts["return_law"].text
             if ret_law not in LAWS:
-                line.error(f"unknown motion law {ret_law!r}", opts["return_law"].col,
+                line.error(f"unknown motion law {ret_law!r}{did_you_mean(ret_law, LAWS)}",
+                           opts["return_law"].col,
                            "one of " + ", ".join(LAWS))
         try:
             return cam_cycle(text, values["rise"], values["dwell"], values["return"],

@@ -27,6 +27,8 @@ def test_resonances_text_and_json(capsys):
     status, out, err = run(["resonances", STB], capsys)
     assert status == 0, err
     assert "3 resonances (K = 0), 2 anti-resonances (K = ∞)" in out
+    status, out, err = run(["resonances", STB, "--omega-max", 800], capsys)
+    assert status == 0 and ": 1 resonance (K = 0), 1 anti-resonance (K = ∞) up to" in out
     status, out, err = run(["resonances", STB, "--omega-max", 1000, "--json"], capsys)
     doc = json.loads(out)
     api = mechcirc.load(STB).resonances(omega_max=1000)

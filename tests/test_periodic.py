@@ -227,7 +227,10 @@ def test_netlist_motion_syntax_units_and_round_trip():
 
 # the column is that of the offending value
 @pytest.mark.parametrize("line,col,needle", [
-    ("drive V T 0 motion=cycloid rise=90 return=90 stroke=1", 20, "unknown motion law"),
+    ("drive V T 0 motion=cycloid rise=90 return=90 stroke=1", 20,
+     "unknown motion law 'cycloid'; did you mean 'cycloidal'?"),
+    ("drive V T 0 motion=harmonic rise=90 return=90 stroke=1 return_law=cycloid", 67,
+     "unknown motion law 'cycloid'; did you mean 'cycloidal'?"),
     ("drive V T 0 motion=cycloidal rise=90 stroke=1", 20, "needs return="),
     ("drive V T 0 motion=cycloidal rise=200 return=200 stroke=1", 35, "more than one revolution"),
     ("drive V T 0 motion=cycloidal rise=90 return=90 stroke=0", 55, "stroke"),

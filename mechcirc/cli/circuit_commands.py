@@ -451,8 +451,9 @@ def cmd_resonances(args) -> int:
         _plot_modes(args, circuit, modes)
     if args.json:
         return _print_resonances_json(args, circuit, found, modes)
-    print(f"{args.file}: {sum(r.kind == 'resonance' for r in found)} resonances (K = 0), "
-          f"{sum(r.kind == 'antiresonance' for r in found)} anti-resonances (K = ∞)"
+    nr, na = (sum(r.kind == k for r in found) for k in ("resonance", "antiresonance"))
+    print(f"{args.file}: {nr} resonance{'s' * (nr != 1)} (K = 0), {na} anti-resonance"
+          f"{'s' * (na != 1)} (K = ∞)"
           + (f" up to {in_unit(args.omega_max, args.unit):g} {args.unit}" if args.omega_max
              else ""))
     for line in Resonances(found).table(args.unit):
