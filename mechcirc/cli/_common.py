@@ -442,7 +442,7 @@ PLOT_FORMATS = ("png", "svg", "pdf", "eps", "ps", "jpg", "jpeg", "tif", "tiff", 
 
 
 def check_output_paths(*paths, plots=(), reads=(), table: str | None = None,
-                       option: str = "-o") -> None:
+                       option: str = "-o", drawn_by: str | None = None) -> None:
     """Refuse, before any work, outputs that cannot or must not be written.
 
     An output into a missing folder (a dangling link's included), onto a
@@ -452,8 +452,8 @@ def check_output_paths(*paths, plots=(), reads=(), table: str | None = None,
     (:func:`mechcirc.outputs.output_target`).  With ``table`` (what the
     option ``option`` writes, for the message) the first path is that option's:
     refused if named like an image (``-o K.png`` would write CSV text into
-    K.png: the image is ``--plot``'s) or a JSON document (``--json``'s, on
-    stdout).
+    K.png: the image is the drawing option's, ``drawn_by``, by default ``--plot``
+    when ``plots`` are given) or a JSON document (``--json``'s, on stdout).
     """
     from ..outputs import output_target
 
@@ -481,8 +481,9 @@ def check_output_paths(*paths, plots=(), reads=(), table: str | None = None,
                 f"(expected one of {', '.join('.' + f for f in PLOT_FORMATS)})")
     suffix = Path(paths[0]).suffix.lower() if table and paths and paths[0] else ""
     if suffix.lstrip(".") in PLOT_FORMATS:
-        raise MechcircError(f"{paths[0]}: {option} writes {table}, not an image (a command that "
-                            "draws writes its plot to --plot IMAGE)")
+        drawn_by = drawn_by or ("--plot IMAGE" if plots else None)
+        raise MechcircError(f"{paths[0]}: {option} writes {table}, not an image (" + (
+            f"the drawing is written by {drawn_by})" if drawn_by else "this command draws none)"))
     if suffix == ".json":
         raise MechcircError(f"{paths[0]}: {option} writes {table}, not JSON; --json prints the "
                             f"JSON document (--json > {paths[0]})")

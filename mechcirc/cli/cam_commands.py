@@ -143,7 +143,7 @@ def cmd_cam(args) -> int:
 
 def _check_args(args) -> None:
     """The output paths, and the options each follower needs or does not take."""
-    check_output_paths(args.output, args.svg, table="a CSV table")
+    check_output_paths(args.output, args.svg, table="a CSV table", drawn_by="--svg SVG")
     if args.svg and not args.svg.lower().endswith(".svg"):
         raise InputError(f"--svg {args.svg}: the drawing is SVG; give a file ending in .svg")
     if args.follower not in ("flat", "oscillating_flat") and args.roller_radius is None:
