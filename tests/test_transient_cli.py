@@ -204,10 +204,15 @@ def test_crosscheck_reports_progress_per_transient_run():
     assert "[" in bar.stream.getvalue()            # the bar was drawn
 
 
+# FILE:LINE:COL: error: as every input file's (the column and a row of three values
+# added in session 28: "d.csv:3: 'x','2' are not two numbers", and 0,1,3 read as 0,1)
 @pytest.mark.parametrize("content, message", [
-    ("0\n1\n", "d.csv:1: expected two columns time,value, got 1"),
-    ("time,value\n0,1\nx,2\n", "d.csv:3: 'x','2' are not two numbers (expected time,value)"),
-    ("0,nan\n1,2\n", "d.csv:1: non-finite time or value"),
+    ("0\n1\n", "d.csv:1:3: error: 1 column(s) (expected two columns time,value)"),
+    ("time,value\n0,1\nx,2\n", "d.csv:3:1: error: 'x' is not a number (expected time,value"),
+    ("time,value\n0,1\n1,y\n", "d.csv:3:3: error: 'y' is not a number"),
+    ("0,1\n1,2,3\n", "d.csv:2:5: error: 3 column(s) (expected two columns time,value)"),
+    ("0,nan\n1,2\n", "d.csv:1:1: error: non-finite time or value"),
+    ("0,1\n1,2\n0.5,3\n", "d.csv:3:1: error: time 0.5 is not after the previous 1"),
     ("time,value\n0,1\n", "d.csv: needs at least two samples (time,value)"),
 ])
 def test_bad_drive_csv_files_exit_2_at_their_line(content, message, capsys, tmp_path):

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
-from ..errors import MechcircError
+from ..errors import MechcircError, NetlistError
 from ..units import parse_omega
 
 if TYPE_CHECKING:  # pragma: no cover - annotations only
@@ -124,27 +124,28 @@ def parse_waveform(text: str | None) -> Waveform:
 
 def read_csv_drive(path: str) -> Waveform:
     """Drive samples from a CSV file of two columns, time [s] and value (one header line allowed)."""
-    from ..sources import csv_rows, read_source
+    from ..sources import csv_rows, is_number, read_source
 
     text = read_source(path, "a drive CSV (time,value)")
     times: list[float] = []
     values: list[float] = []
-    for lineno, row, _, _ in csv_rows(text, path):
-        if len(row) < 2:
-            raise MechcircError(f"{path}:{lineno}: expected two columns time,value, got "
-                                f"{len(row)}")
+    for lineno, row, cols, end in csv_rows(text, path):
+        if len(row) != 2:
+            raise NetlistError(f"{len(row)} column(s)", path, lineno, cols[2] if len(row) > 2
+                               else end, "two columns time,value")
         try:
             t, v = float(row[0]), float(row[1])
         except ValueError:
             if not times and lineno == 1:
                 continue                        # a header line
-            raise MechcircError(f"{path}:{lineno}: {row[0]!r},{row[1]!r} are not two numbers "
-                                "(expected time,value)") from None
+            j = 0 if not is_number(row[0]) else 1
+            raise NetlistError(f"{row[j].strip()!r} is not a number", path, lineno, cols[j],
+                               "time,value: two numbers") from None
         if not (math.isfinite(t) and math.isfinite(v)):
-            raise MechcircError(f"{path}:{lineno}: non-finite time or value")
+            raise NetlistError("non-finite time or value", path, lineno, 1, "finite numbers")
         if times and t <= times[-1]:
-            raise MechcircError(f"{path}:{lineno}: time {t:g} is not after the previous "
-                                f"{times[-1]:g} (times must increase)")
+            raise NetlistError(f"time {t:g} is not after the previous {times[-1]:g}", path,
+                               lineno, cols[0], "times that increase")
         times.append(t)
         values.append(v)
     if len(times) < 2:
