@@ -45,6 +45,14 @@ def test_a_run_where_nothing_moves_says_so():
               transient(mechcirc.parse(SDOF_F + ".ic a x=1e-3\n"), 0.1, 1e-3))
     for r in moving:
         assert np.any(r.x) and not quiet(r), r.notes
+    # a velocity step of amplitude 0 moves nothing: no note of a jump beside it (it said
+    # both, session 28); of amplitude 1 it has the jump's note and not the other
+    v = mechcirc.parse("drive V a 0 velocity=1\nspring k a b 1e3\nmass m b 0 1\n")
+    for amp, still in ((0.0, True), (1.0, False)):
+        notes = transient(v, 0.1, 1e-3, "step", amplitude=amp).notes
+        jumps = [n for n in notes if "jump in velocity" in n]
+        assert (len([n for n in notes if n.startswith("nothing moves")]), len(jumps)) == \
+            ((1, 0) if still else (0, 1)), notes
 
 
 def test_sdof_step_response_closed_form():

@@ -209,7 +209,7 @@ def _start(ss: StateSpace, drive: Waveform, amp: float, u, steady: bool, circuit
         notes.append("nothing moves: the drive is at rest and every initial state is 0 "
                      "(give a waveform: harmonic:OMEGA, step, impulse or csv:PATH, an "
                      "amplitude other than 0, or .ic lines)")
-    if drive.kind == "step" and ss.kind == "velocity":
+    if drive.kind == "step" and ss.kind == "velocity" and amp != 0:
         notes.append("a velocity step makes the drive's nodes jump in velocity: the force "
                      "through the drive has an impulse at t = 0 that samples cannot show")
     if steady:
