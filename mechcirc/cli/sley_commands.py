@@ -191,7 +191,8 @@ def _table(result, paper_applies: bool = True) -> str:
         lines.append(f"* the paper's printed moments fit this sign{both} (docs/sley.md)")
     else:
         lines.append("* changed parameters: the paper did not compute this case ('-' columns)")
-    lines.extend(f"note: {n}" for n in result.notes)
+    # (a note "warning: ..." is the SleyAccuracyWarning the command prints as a warning)
+    lines.extend(f"note: {n}" for n in result.notes if not n.startswith("warning: "))
     return "\n".join(lines)
 
 

@@ -133,6 +133,14 @@ def test_crosscheck_disagreement_exits_3(monkeypatch, capsys, cli_once):
     assert doc["verdict"] == "disagrees" and doc["summary"]["disagree"] == 3
 
 
+def test_a_warning_is_printed_once(capsys):
+    """New-user pass, session 28: 'not yet periodic' came twice, as 'note: warning: ...'
+    on stdout and as the command's warning on stderr."""
+    assert main(["simulate", "--set", "omega=3000rpm", "--revolutions", "2"]) == 0
+    out, err = capsys.readouterr()
+    assert (out + err).count("not yet periodic") == 1 and "warning: one-side" in err
+
+
 def test_changed_parameters_drop_the_paper_columns(capsys):
     """The paper computed its variants at their own parameters: --set omega=120 is not one."""
     assert main(["simulate", "--drive", "one-side", "--variant", "1", "--set", "omega=120",
