@@ -907,8 +907,9 @@ def plot_modes(found, name: str = "circuit", *, ax=None, fig=None, unit: str = "
     found : list of Mode
     name : str
     ax : matplotlib.axes.Axes, optional
-        Draw only the first mode's panel there (nothing else of its figure is touched); ``fig``
-        is then not used.
+        Draw only the first mode that has a shape there (the lowest that vibrates: an
+        overdamped root has none; nothing else of its figure is touched); ``fig`` is then
+        not used.
     fig : matplotlib.figure.Figure or SubFigure, optional
         An empty one to fill (see :func:`new_panels`); a new one by default.
     unit : {"rad/s", "Hz", "rpm"}
@@ -920,6 +921,7 @@ def plot_modes(found, name: str = "circuit", *, ax=None, fig=None, unit: str = "
         What it drew on: ``ax`` when given, else ``fig`` (it must be empty) or the new Figure.
     """
     made = fig is None and ax is None
+    found = found if ax is None else [m for m in found if m.shape][:1] or found[:1]
     fig, axes = new_panels(fig, max(len(found), 1), caller="plot_modes", ax=ax, figsize=(
         max(6.0, 0.45 * max((len(m.shape) for m in found), default=0) + 2), 2.6 * max(len(found), 1)))
     for mode, panel in zip(found, axes[:, 0]):

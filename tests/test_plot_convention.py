@@ -226,3 +226,23 @@ def test_ax_of_a_multi_panel_plot_is_its_main_panel_line_for_line(made):
         for a, b in zip(drawn, own.lines):
             np.testing.assert_array_equal(a.get_xydata(), b.get_xydata(), err_msg=name)
         assert mine.get_xlabel() and mine.get_title(), name
+
+
+def test_plot_modes_on_ax_draws_the_first_mode_that_vibrates():
+    """New-user pass, session 28: plot_modes(found, ax=) drew found[0], which may be an
+    overdamped root with no shape: the caller's Axes held only its note."""
+    from mechcirc.modes import modes
+    from mechcirc.plotting import plot_mode, plot_modes
+
+    c = mechcirc.parse("drive V a 0 velocity=1\nmass m1 a 0 1.5\nspring k1 a b 2e5\n"
+                       "damper c1 a b 50\nmass m2 b 0 0.8\nspring k2 b c 1e5\n"
+                       "mass m3 c 0 0.5\ndamper c3 c 0 20\n")
+    found = modes(c)
+    assert not found[0].shape and found[1].shape          # an overdamped root first
+    fig, mine, _ = _callers_figure()
+    assert plot_modes(found, ax=mine) is mine and fig.axes == [mine]
+    own = plot_mode(found[1]).axes[0]            # (plot_mode's own Figure of that mode)
+    drawn = [ln for ln in mine.lines if ln.get_gid() != "mine"]
+    assert len(drawn) == len(own.lines) > 0
+    for a, b in zip(drawn, own.lines):
+        np.testing.assert_array_equal(a.get_xydata(), b.get_xydata())
