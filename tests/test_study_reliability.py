@@ -424,6 +424,22 @@ def test_bad_spec_keys_suggest_the_nearest(data, fragment):
     assert fragment in str(info.value)
 
 
+@pytest.mark.parametrize("body, where", [
+    ("[grid]\n# the lever\neta1 = [0.8]\n\nkk = [2.0]\n", (8, 1)),
+    ("grid.eta1 = [0.8]\ngrid.zz = [1.5]\n", (5, 6)),
+    ("[sample]\nn = 4\n[sample.params]\neta1 = {min=1, max=2}\nqq = {min=1, max=2}\n", (8, 1)),
+])
+def test_a_parameter_that_is_not_a_param_is_located_at_its_key(body, where, tmp_path):
+    """New-user pass, session 28: reported at the table's header (4:2), and a dotted key
+    without a line at all."""
+    spec = tmp_path / "s.toml"
+    spec.write_text(f'netlist = "{STB}"\nomega = {{min = 1, max = 10, points = 3}}\n'
+                    f'analysis = "sweep"\n{body}')
+    with pytest.raises(NetlistError, match="is not a .param of") as info:
+        load_spec(spec)
+    assert (info.value.line, info.value.col) == where, str(info.value)
+
+
 # ------------------------------------------------------------------ issue 23 §6
 def test_a_file_that_is_not_a_netlist_is_not_quoted(tmp_path, capsys):
     secret = tmp_path / "shadow"

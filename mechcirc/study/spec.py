@@ -299,9 +299,12 @@ def _parse_spec(data: dict, source: str, base: Path) -> StudySpec:
         units = tuple(map(_sley_units().get, names))
     else:
         if missing := [n for n in names if n not in roles]:     # each a .param, checked once
-            _fail((kind,), f"{', '.join(missing)} is not a .param of {path}"
-                           f"{did_you_mean(missing[0], roles)} (its parameters: "
-                           f"{', '.join(roles) or 'none'})")
+            # at the first one's key ([grid] or [sample.params]; a sample file's header: its table)
+            at = (kind,) if "file" in data[kind] else (kind, missing[0]) if kind == "grid" \
+                else (kind, "params", missing[0])
+            _fail(at, f"{', '.join(missing)} is not a .param of {path}"
+                      f"{did_you_mean(missing[0], roles)} (its parameters: "
+                      f"{', '.join(roles) or 'none'})")
         units = tuple(roles[n][0] for n in names)
     canon = {"analysis": analysis, "sample": canon, "rows": ROWS_VERSION}
     if omega is not None:                       # analysis == "sweep"
