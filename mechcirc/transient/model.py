@@ -127,7 +127,8 @@ def _split(S: np.ndarray, basis: np.ndarray, full: float, rel: float = 1e-13):
     (the largest entry of the node matrix times the basis T of the free motion): the
     restriction's rounding is of order ε × ``full``, T's own rounding included (not
     the node matrix's largest entry: a 1e15 kg velocity-driven mass, which T does not
-    move, made a 1 kg mass behind a spring massless: session 28).  A direction with none of S (a lever-held node pair beside
+    move, made a 1 kg mass behind a spring massless: session 28).  A direction with
+    none of S (a lever-held node pair beside
     the velocity-driven mass) came out with mass 1e-34, made a massive state
     whose A held 1.5e48, and no periodic state existed at any ω (crosscheck
     campaign, seed 3, network 116); and a real mass of 4.5e-9 beside 1.4e4 (a
