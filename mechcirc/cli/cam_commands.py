@@ -110,11 +110,9 @@ def _motion(args):
                          + f" ({exc.expected}; no unit means {'deg' if osc else 'mm'})") from None
     except ValueError as exc:
         raise InputError(str(exc)) from None
-    text = (f"{args.law} rise {args.rise:g}° dwell {dwell:g}° "
-            + (f"return {ret:g}° ({args.return_law})" if args.return_law
-               else f"return {ret:g}°")
-            + f", low dwell {360 - total:g}°, stroke {stroke:g}{unit}")
-    return m, text
+    law = f" ({args.return_law})" if args.return_law else ""
+    return m, (f"{args.law} rise {args.rise:g}° dwell {dwell:g}° return {ret:g}°{law}, "
+               f"low dwell {360 - total:g}°, stroke {stroke:g}{unit}")
 
 
 def _mm(v: float) -> str:
