@@ -125,7 +125,6 @@ def reduce_network(elements, levers, a: str, b: str, *, drive_line: int = 0,
 
 def _reduce(edges: list[_Edge], levers: list[Lever], a: str, b: str,
             unloaded: list[str], drive_line: int, source: str) -> Node:
-    edges, levers = list(edges), list(levers)
     changed = True
     while levers and changed:
         changed = False
@@ -185,8 +184,7 @@ def _reduce_edges(n1s: list, n2s: list, nodes: list, a: str, b: str, unloaded: l
         found = _series_parallel_runs([n1s[i] for i in kept], [n2s[i] for i in kept],
                                       [nodes[i] for i in kept], a, b, explain=True)
     root, dangling = found
-    for node in dangling:
-        unloaded.extend(el.name for el in leaves(_close(node, 1)[0]))
+    unloaded.extend(el.name for node in dangling for el in leaves(_close(node, 1)[0]))
     return root
 
 
