@@ -76,12 +76,10 @@ def contact_report(scene, sm) -> ContactReport:
     if not getattr(lk, "contact", ""):
         raise MechcircError(f"{scene.source}: the scene's [cam] has no contact that can open "
                             "(contact = NAME)")
-    flew = flight(scene, sm)
-    if flew:
+    if flew := flight(scene, sm):
         raise MechcircError(flew)
     el, _, _, _, half = contact_geometry(scene)
-    e = sm.values[f"{el.name}.deformation"]
-    squeeze = -el.stiffness * (e + half)
+    squeeze = -el.stiffness * (sm.values[f"{el.name}.deformation"] + half)
     lo, at = least_sample(squeeze, periodic=True)
     deg = np.degrees(sm.crank_angle)
     step = 360.0 / deg.size
