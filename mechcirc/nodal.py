@@ -291,8 +291,7 @@ class _Solved:
         elif self.keep is not None:
             # Only the rows :func:`solve` may need: where no digit of K is known.
             maybe = self.keep[sel] & ~(np.isfinite(K) & (err < 1.0))
-            for k in np.flatnonzero(maybe):
-                self.kept[int(sel[k])] = x[k]
+            self.kept.update({int(sel[k]): x[k] for k in np.flatnonzero(maybe)})
 
     def dd_retry(self, every, refined) -> None:
         """Solve again with the double-double LU where float64 did not converge."""
@@ -582,8 +581,7 @@ def _step_bound_numpy(system, pat, omega, xh, xl, d, r, lu) -> NDArray:
     with np.errstate(all="ignore"):
         c, n = xh.shape
         zero = np.zeros((c, 1))                 # (the reference's column)
-        ax = np.concatenate([np.abs(xh.real) + np.abs(xh.imag), zero], axis=1)
-        ad = np.concatenate([np.abs(d.real) + np.abs(d.imag), zero], axis=1)
+        ax, ad = (np.concatenate([np.abs(v.real) + np.abs(v.imag), zero], axis=1) for v in (xh, d))
         # |y_e| = |c_e| + |ω||m_e| + |k_e|/|ω| (one of the three is nonzero; ω complex
         # too): by kind, one product with the (c, E) array, no admittance array.
         ends = ax.take(pat.e_i, 1) + ax.take(pat.e_j, 1)     # (take: x[:, idx], faster)
@@ -623,8 +621,7 @@ def _estimate(system, xh, xl, d, prev, r, kern=None):
         return est, rho
     with np.errstate(all="ignore"):
         nx = row_max(np.abs(xh))
-        da = np.abs(d[..., system.a]) if system.a >= 0 else 0.0
-        db = np.abs(d[..., system.b]) if system.b >= 0 else 0.0
+        da, db = (np.abs(d[..., i]) if i >= 0 else 0.0 for i in (system.a, system.b))
         return estimate_point(row_max(np.abs(d)), nx, nx if prev is None else
                               row_max(np.abs(prev)), np.abs(difference_dd(system, xh, xl)),
                               np.abs(system.difference(d)), da, db,
