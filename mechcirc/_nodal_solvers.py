@@ -240,8 +240,7 @@ class DenseSolver:
     def factor(self, omega, kern=None):
         A = combine(self.dc, self.m, self.k, np.asarray(omega)[:, None, None])
         good = np.isfinite(A).all(axis=(1, 2))
-        A = A[good]
-        inv, ok = stacked_inverse(A)
+        inv, ok = stacked_inverse(A[good])
         if ok is not None:
             good[np.flatnonzero(good)[~ok]] = False
             inv = inv[ok]
@@ -641,12 +640,11 @@ class SparseSolver:
                                     diag_pivot_thresh=1.0 if strict else DIAG_PIVOT_THRESH))
             except RuntimeError:            # exactly singular at this frequency
                 good[k] = False
-        perm, iperm = self.perm, self.iperm
 
         def solve(r, rows=None):
-            r = np.asarray(r, dtype=complex)[:, iperm]
+            r = np.asarray(r, dtype=complex)[:, self.iperm]
             use = factors if rows is None else [factors[i] for i in rows]
-            return np.stack([lu.solve(r[k])[perm] for k, lu in enumerate(use)]) if use \
+            return np.stack([lu.solve(r[k])[self.perm] for k, lu in enumerate(use)]) if use \
                 else np.zeros((0, n), complex)
         return good, solve
 
