@@ -367,9 +367,8 @@ def held(system: NodalSystem) -> NodalSystem:
             rows += [i, n]
             cols += [n, i]
             vals += [s, s]
-    stamped = dict(system.stamps)
-    stamped["lever"] = (np.asarray(rows, dtype=int), np.asarray(cols, dtype=int),
-                        np.asarray(vals, dtype=float))
+    lever = (np.asarray(rows, dtype=int), np.asarray(cols, dtype=int),
+             np.asarray(vals, dtype=float))
     return NodalSystem(system.nodes, system.levers, system.elements, system.unloaded,
-                       n + 1, n, -1, stamped)
+                       n + 1, n, -1, {**system.stamps, "lever": lever})
 
