@@ -225,8 +225,7 @@ class Pattern:
         q_h, q_l = two_prod(self.s_val, *self.s_vs, xs)
         if xl is not None:
             q_l = q_l + self.s_val * xle[:, self.s_col]
-        T_h = np.concatenate([p_h, -p_h, q_h], axis=1)
-        T_l = np.concatenate([p_l, -p_l, q_l], axis=1)
+        T_h, T_l = (np.concatenate([p, -p, q], axis=1) for p, q in ((p_h, q_h), (p_l, q_l)))
         S_h, S_l = np.zeros((c, 4 * n), dtype=complex), np.zeros((c, 4 * n), dtype=complex)
         slots, buckets = self.slot_plan
         if slots:
@@ -364,9 +363,7 @@ def _complex_omega_terms(m_h, m_l, k_h, k_l, w):
     num_im = dd_add(*p3, -p4[0], -p4[1])   # im·ur − re·ui
     n2 = dd_add(*dd_mul_d(ur, 0.0, ur, *sur), *dd_mul_d(ui, 0.0, ui, *sui))
     den = (n2[0] * e2, n2[1] * e2)
-    kw_re = dd_div_dd(*num_re, *den)
-    kw_im = dd_div_dd(*num_im, *den)
-    return wm_re, wm_im, kw_re, kw_im
+    return wm_re, wm_im, dd_div_dd(*num_re, *den), dd_div_dd(*num_im, *den)
 
 
 def pattern(system: NodalSystem) -> Pattern:
