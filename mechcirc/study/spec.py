@@ -510,10 +510,9 @@ def _sample_row(cells: list, names: tuple[str, ...], source: str, line: int,
                            f"columns{missing}", source, line, cells[-1][1] if cells else 1)
     row = []
     for (text, col), name in zip(cells, names):
-        try:
+        value = None
+        with contextlib.suppress(ValueError):
             value = float(text) if isinstance(text, str) else text
-        except ValueError:
-            value = None
         if value is None or isinstance(value, bool) or not math.isfinite(value):
             unit = roles.get(name, (None,))[0]
             raise NetlistError(f"column {name}: {brief(text)} is not a finite number",
