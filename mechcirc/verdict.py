@@ -85,8 +85,7 @@ def verdict_text(row: dict) -> str:
     """
     if row["verdict"] == UNMEASURED:
         return f"cannot be measured: {row['why']}"
-    sign = "≤" if row["verdict"] == AGREES else ">"
-    word = "agrees" if row["verdict"] == AGREES else "DISAGREES"
+    word, sign = ("agrees", "≤") if row["verdict"] == AGREES else ("DISAGREES", ">")
     return f"{word} ({sign} tol {row['tol']:.0e})" + (f": {row['why']}" if row["why"] else "")
 
 
