@@ -81,8 +81,7 @@ def _motion(args):
     from ..motion_laws import cam_cycle, read_motion_table
 
     osc = args.follower.startswith("oscillating")
-    scale = math.pi / 180 if osc else 1.0
-    unit = "°" if osc else " mm"
+    scale, unit = (math.pi / 180, "°") if osc else (1.0, " mm")
     refuse_ignored(args, {f"--{o}": (not args.motion, "a --law cycle, not to a --motion table", "")
                           for o in ("rise", "dwell", "return", "low-dwell", "stroke", "return-law")})
     if args.motion:
