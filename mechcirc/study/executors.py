@@ -306,11 +306,9 @@ _LOCK_FDS: set[int] = set()
 
 
 def _holder(path: str) -> str:
-    try:
-        with open(path, encoding="utf-8", errors="replace") as fh:
-            return fh.read(200).strip()
-    except OSError:
-        return ""
+    with contextlib.suppress(OSError), open(path, encoding="utf-8", errors="replace") as fh:
+        return fh.read(200).strip()
+    return ""
 
 
 #: Memory a task may fill with its arrays (bytes): the batch's K, error bound,
@@ -423,14 +421,13 @@ def _dask_client(scheduler: str, timeout: float):
                             f"{exc}") from None
     try:
         client.wait_for_workers(1, timeout=timeout)
-    except (OSError, TimeoutError):
+    except BaseException as exc:
         client.close()
+        if not isinstance(exc, (OSError, TimeoutError)):
+            raise
         raise MechcircError(f"the Dask scheduler at {scheduler} has no workers (none joined "
                             f"within {timeout:g} s); start one with 'dask worker {scheduler}' "
                             "or raise --connect-timeout") from None
-    except BaseException:
-        client.close()
-        raise
     return client
 
 
