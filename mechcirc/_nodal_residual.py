@@ -58,13 +58,11 @@ class Pattern:
         rows, cols = np.concatenate(r), np.concatenate(c)
         ends = list(accumulate([len(x) for x in r], initial=0))  # each kind's stamps, in order
         self.n = n
-        key = cols * n + rows
-        uniq, inv = np.unique(key, return_inverse=True)
+        uniq, inv = np.unique(cols * n + rows, return_inverse=True)
         self.key = uniq                         # col·n + row of each nonzero
         self.indices = (uniq % n).astype(np.int32)
         self.indptr = np.searchsorted(uniq // n, np.arange(n + 1)).astype(np.int32)
-        nnz = uniq.size
-        parts = [np.bincount(inv[ends[i]:ends[i + 1]], weights=v[i], minlength=nnz)
+        parts = [np.bincount(inv[ends[i]:ends[i + 1]], weights=v[i], minlength=uniq.size)
                  .astype(float, copy=False) for i in range(4)]     # (int where no stamps)
         self.m, self.k, self.dc = parts[0], parts[2], parts[1] + parts[3]
         self._elements(system)
@@ -99,11 +97,10 @@ class Pattern:
                                         for i in range(3))
         # |c|, |m|, |k| by element, (E, 3): the first-step bound's sums by kind.
         self.e_abs = np.abs([self.e_c, self.e_m, self.e_k]).T
-        n_nodes = len(system.nodes)
         lv = system.levers
         self.l_p1 = np.array([at(v.p1, n) for v in lv], dtype=np.int64)
         self.l_p2 = np.array([at(v.p2, n) for v in lv], dtype=np.int64)
-        self.l_col = n_nodes + np.arange(len(lv), dtype=np.int64)
+        self.l_col = len(system.nodes) + np.arange(len(lv), dtype=np.int64)
         self.l_r = np.array([abs(v.ratio) for v in lv], dtype=float)
         self.s_abs = np.abs(self.s_val)
 
@@ -145,9 +142,8 @@ class Pattern:
         """
         n = self.n
         bucket = np.concatenate([self.k_bi, self.k_bj, self.k_bs])   # (the reference's: 4n)
-        term = np.arange(bucket.size)
         keep = bucket < 4 * n                  # rows of the reference dropped
-        bucket, term = bucket[keep], term[keep]
+        bucket, term = bucket[keep], np.flatnonzero(keep)
         uniq, inv, counts = np.unique(bucket, return_inverse=True, return_counts=True)
         order = np.argsort(-counts, kind="stable")
         rank = np.empty_like(order)
