@@ -462,9 +462,8 @@ def _sample_file(table: dict, base: Path, analysis: str, roles: dict):
     if len(records) > MAX_POINTS:
         raise NetlistError(f"has {len(records):,} rows, the limit is {MAX_POINTS:,}", source)
     points = tuple(_sample_row(cells, names, source, line, roles) for line, cells in records)
-    canon = {"method": "file", "columns": list(names),
-             "file_sha256": sha256(read_bytes(path, "a sample"))}
-    return names, points, canon
+    return names, points, {"method": "file", "columns": list(names),
+                           "file_sha256": sha256(read_bytes(path, "a sample"))}
 
 
 def _sample_path(table: dict, base: Path) -> Path:
