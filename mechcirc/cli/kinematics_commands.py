@@ -288,7 +288,8 @@ def cmd_frame(args) -> int:
     lengths = (args.crank, args.coupler, args.rocker, args.frame)
     FourBar(*lengths, branch=args.branch)       # refused (if it is) in the lengths typed
     k = 1e-3 if args.unit == "mm" else 1.0            # to metres
-    fb = FourBar(*(x * k for x in lengths), branch=args.branch)
+    a, b, c, d = (x * k for x in lengths)
+    fb = FourBar(a, b, c, d, branch=args.branch)
     if not fb.is_full_turn_crank_rocker:
         raise MechcircError(
             f"frame loading needs a crank-rocker whose crank turns fully; this four-bar is a "

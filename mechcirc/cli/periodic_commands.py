@@ -152,8 +152,8 @@ def _one_speed(args, circuit, elements, motion) -> int:
     if r.harmonics > top.size:
         print(f"  (the {top.size} largest of {r.harmonics} harmonics; --json lists all)")
     for name in elements:
-        if (top := r.element_peaks.get(name)) is not None:
-            print(f"  element {name}: peak |force| {top[0]:.6g} {unit} at θ = {top[1]:.4f} deg")
+        if (pk := r.element_peaks.get(name)) is not None:
+            print(f"  element {name}: peak |force| {pk[0]:.6g} {unit} at θ = {pk[1]:.4f} deg")
     print_written(("CSV", args.output), ("plot", args.plot), notes=r.notes)
     return 0
 
