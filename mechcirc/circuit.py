@@ -259,42 +259,44 @@ class Drive:
     rotational: bool = field(default=False, compare=False)   # labels only
 
 
-def units_of(drive: Drive | None) -> dict[str, str]:
+def units_of(drive: Drive | bool | None) -> dict[str, str]:
     """Unit labels of a circuit driven by ``drive``: keys ``v``, ``Q``, ``x``, ``K``.
 
-    Translational: m/s, N, m, m/(N·s); rotary (``drive.rotational``): rad/s,
-    N·m, rad, rad/(N·m·s).
+    Translational: m/s, N, m, m/(N·s); rotary (``drive.rotational``, or ``drive``
+    True: an element's own kind, :meth:`Circuit.rotational`): rad/s, N·m, rad,
+    rad/(N·m·s).
 
     Parameters
     ----------
-    drive : Drive or None
+    drive : Drive, bool or None
 
     Returns
     -------
     dict[str, str]
     """
-    if drive is not None and drive.rotational:
+    if drive if isinstance(drive, bool) else drive is not None and drive.rotational:
         return {"v": "rad/s", "Q": "N·m", "x": "rad", "K": "rad/(N·m·s)"}
     return {"v": "m/s", "Q": "N", "x": "m", "K": "m/(N·s)"}
 
 
-def element_unit(kind: str, drive: Drive | None) -> str:
+def element_unit(kind: str, drive: Drive | bool | None) -> str:
     """Unit label of an element's value in a circuit driven by ``drive``.
 
-    ``kg``, ``N/m``, ``N·s/m``; in a rotary circuit (``drive.rotational``)
+    ``kg``, ``N/m``, ``N·s/m``; in a rotary circuit (``drive.rotational``, or
+    ``drive`` True: the element's own kind, :meth:`Circuit.rotational`)
     ``kg·m²``, ``N·m/rad``, ``N·m·s/rad`` (:data:`LAWS`).
 
     Parameters
     ----------
     kind : {"mass", "spring", "damper"}
-    drive : Drive or None
+    drive : Drive, bool or None
 
     Returns
     -------
     str
     """
     law = LAWS[kind]
-    return law.rotary_unit if drive is not None and drive.rotational else law.unit
+    return law.rotary_unit if units_of(drive)["Q"] == "N·m" else law.unit
 
 
 @dataclass(frozen=True)
@@ -326,6 +328,10 @@ class Circuit(Memos):
         table)``, the parsed expressions and the objects they were read for;
         ``()`` for circuits built in code.  Read it through
         :func:`mechcirc.netlist.expressions_of`.  Not compared, not shown.
+    node_kinds : dict of str to bool
+        Set by :func:`mechcirc.parse`: each node whose elements carry units of one
+        kind only, True for rotary (kg·m², N·m/rad, N·m·s/rad), False for
+        translational; for labels (:meth:`rotational`).  Not compared, not shown.
 
     Analysis methods (``tree``, ``unloaded``, ``nodal``, ``sweep``,
     ``resonances``, ``two_port``, ``formula``) are one-line delegates to the
@@ -342,6 +348,13 @@ class Circuit(Memos):
     params: dict = field(default_factory=dict, compare=False)
     initial: tuple = ()
     expressions: tuple = field(default=(), compare=False, repr=False)
+    node_kinds: dict = field(default_factory=dict, compare=False, repr=False)
+
+    def rotational(self, element: Element) -> bool:
+        """Whether ``element`` is rotary, for its unit labels: its nodes' kind from the
+        units written in the netlist (:attr:`node_kinds`), else the drive's."""
+        kinds = [self.node_kinds[n] for n in (element.n1, element.n2) if n in self.node_kinds]
+        return kinds[0] if kinds else self.drive is not None and self.drive.rotational
 
     def require_drive(self) -> Drive:
         """The drive; a :class:`~mechcirc.errors.NetlistError` if the circuit has none.

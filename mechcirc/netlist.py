@@ -489,10 +489,12 @@ class _Parser:
             # (the parser's own new Drive, not yet seen by anyone: set, not replaced)
             object.__setattr__(drive, "rotational", rot)
         elements, levers, params = tuple(self.elements), tuple(self.levers), dict(self.params)
+        one_kind = {n: True in k for n, k in self.node_kinds.items() if len(k) == 1}
         return Circuit(elements=elements, drive=drive, levers=levers, name=name,
                        source=self.source, params=params,
                        initial=tuple((n, x, v) for n, x, v, _, _ in self.initial),
-                       expressions=(elements, levers, drive, params, self.expressions))
+                       expressions=(elements, levers, drive, params, self.expressions),
+                       node_kinds=one_kind)
 
     def with_unit(self, line: _Line, value: float, unit: _Token | None, role: str,
                   key: tuple[str, str] | None = None) -> float:

@@ -95,3 +95,24 @@ def test_to_dataframe_carries_the_units_of_its_columns(text, units):
     s = mechcirc.parse(text).sweep(np.array([10.0, 100.0]))
     df = s.to_dataframe()
     assert df.attrs["units"] == units and list(df.columns) == list(units)
+
+
+def test_a_rotary_stage_behind_a_lever_is_labelled_rotary(capsys):
+    """New-user pass, session 28: in docs/examples/units.mcir (a translational drive, a
+    lever of 8 rad/m to a rotary stage) check showed J = 4e-05 kg·m² as '4e-05 kg' and
+    kt as '12 N/m', and forces and resonances --modes gave J's moment (0.0032 N·m =
+    100 · 4e-5 · 0.8, by hand) under '|Q| [N]' and its 0.8 rad/s under '|v| [m/s]'."""
+    units = REPO / "docs" / "examples" / "units.mcir"
+    c = mechcirc.load(units)
+    assert {e.name: c.rotational(e) for e in c.elements} == {
+        "m": False, "k": False, "c": False, "J": True, "kt": True}
+    status, out, _ = run(["check", units], capsys)
+    assert status == 0 and "4e-05 kg·m²" in out and "12 N·m/rad" in out and "0.25 kg" in out
+    status, out, _ = run(["forces", units, "--omega", 100], capsys)
+    rows = {line.split()[0]: line for line in out.splitlines()[2:]}
+    assert rows["J"].split()[2] == "0.0032" and rows["J"].endswith("[N·m, rad/s]")
+    assert rows["kt"].endswith("[N·m, rad/s]") and not rows["m"].endswith("]")
+    status, out, _ = run(["resonances", units, "--modes"], capsys)
+    tables = out.count("zeta part")             # one element table per mode with a shape
+    assert tables >= 1 and [line.split()[0] for line in out.splitlines()
+                            if line.endswith("[N·m, rad/s]")] == ["J", "kt"] * tables

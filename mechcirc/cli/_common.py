@@ -382,6 +382,17 @@ MAX_OMEGA = 1e100
 MAX_LENGTH = 1e50
 
 
+def own_units(circuit) -> dict[str, str]:
+    """``"  [N·m, rad/s]"`` (force, velocity) for each element whose kind, rotary or not
+    (:meth:`mechcirc.circuit.Circuit.rotational`), is not the drive's: a table's row
+    of it is in those units, not its header's (a rotary stage behind a lever)."""
+    from ..circuit import units_of
+
+    drive = circuit.drive is not None and circuit.drive.rotational
+    return {e.name: "  [{Q}, {v}]".format(**units_of(rot)) for e in circuit.elements
+            if (rot := circuit.rotational(e)) != drive}
+
+
 def fields_of(obj, names: str) -> dict:
     """``{name: obj.name}`` for each of the space-separated attribute ``names``, in order
     (a record of ``--json``)."""

@@ -20,7 +20,7 @@ from ..units import FREQUENCY_UNITS, in_unit
 from ._common import (NETLIST_FILE, Default, add_command, add_handler, add_method_option,
                       add_output_option, add_plot_option, add_unit_option, check_names,
                       check_output_paths, fields_of, frequency_text, load_with_warnings,
-                      positive_omega, print_json, print_written, real, refuse_ignored,
+                      own_units, positive_omega, print_json, print_written, real, refuse_ignored,
                       save_figure, warning_lines)
 
 #: argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``); the
@@ -161,11 +161,12 @@ def cmd_check(args) -> int:
     es = circuit.elements
     wn = max([8] + [len(x.name) for x in es] + [len(lv.name) for lv in circuit.levers])
     wp = max([6] + [len(n) for x in es for n in (x.n1, x.n2)])
-    values = [f"{x.value:g} {element_unit(x.kind, d)}" for x in es]
+    values = [f"{x.value:g} {element_unit(x.kind, circuit.rotational(x))}" for x in es]
     wv = max([12] + [len(v) for v in values])
     for e, value in zip(es, values):
         eta = f"  eta={e.eta:g}" if e.eta != 1 else ""
-        gap = f"  backlash={e.backlash:g} {units_of(d)['x']}" if e.backlash else ""
+        gap = f"  backlash={e.backlash:g} {units_of(circuit.rotational(e))['x']}" \
+            if e.backlash else ""
         print(f"  {e.kind:<7} {e.name:<{wn}} {e.n1:>{wp}} {e.n2:>{wp}}  "
               f"{value:<{wv}}{eta}{gap}".rstrip())
     for lv in circuit.levers:
@@ -466,7 +467,7 @@ def cmd_resonances(args) -> int:
         if m.note and (m.shape or not args.modes):   # else the mode table says it
             print(f"  note: {m.note}")
         if args.modes:
-            _print_mode(m, kinds, units_of(circuit.drive))
+            _print_mode(m, kinds, units_of(circuit.drive), own_units(circuit))
         if args.sensitivity:
             _print_sensitivity(m, kinds)
     print_written(("plot", args.plot))
@@ -512,7 +513,7 @@ def _mode_doc(m) -> dict:
             "force": {n: [q.real, q.imag] for n, q in m.force.items()}}
 
 
-def _print_mode(m, kinds, units: dict) -> None:
+def _print_mode(m, kinds, units: dict, own: dict) -> None:
     import cmath
 
     if not m.shape:
@@ -531,7 +532,7 @@ def _print_mode(m, kinds, units: dict) -> None:
             "0 %" if name in m.energy else ""
         zeta = f"{m.dissipation[name]:.4g}" if name in m.dissipation else ""
         print(f"  {name:<{we}} {kinds[name]:<7} {energy:>8} {zeta:>10} {abs(v):>10.4g} "
-              f"{abs(m.force[name]):>10.4g}")
+              f"{abs(m.force[name]):>10.4g}{own.get(name, '')}")
 
 
 #: What raising (True) or lowering (False) a quantity of each kind is called.

@@ -9,7 +9,7 @@ from ..limits import FORMULA_SECONDS
 from ._common import (NETLIST_FILE, Default, add_command, add_handler, add_method_option,
                       add_output_option, add_plot_option, add_unit_option, band_omega,
                       check_output_paths, count, fields_of, frequency_text, load_with_warnings,
-                      positive_omega, print_json, print_written, real, refuse_ignored,
+                      own_units, positive_omega, print_json, print_written, real, refuse_ignored,
                       save_figure, time_limit, warning_lines)
 
 
@@ -134,9 +134,11 @@ def cmd_forces(args) -> int:
     width = max([len(r.name) for r in rows] + [7])
     print(f"  {'element':<{width}} {'kind':<6} {'|Q| [' + u['Q'] + ']':>12} {'arg Q [deg]':>11} "
           f"{'|Q|/|Q0|':>9} {'|v| [' + u['v'] + ']':>12} {'arg v [deg]':>11}")
+    own = own_units(circuit)
     for r in rows:
         print(f"  {r.name:<{width}} {r.kind:<6} {r.Q_abs:>12.5g} {_deg(r.Q_phase_deg):>11.2f} "
-              f"{r.share:>9.4f} {r.v_abs:>12.5g} {_deg(r.v_phase_deg):>11.2f}")
+              f"{r.share:>9.4f} {r.v_abs:>12.5g} {_deg(r.v_phase_deg):>11.2f}"
+              f"{own.get(r.name, '')}")
     print_written(("plot", args.plot))
     return 0
 
