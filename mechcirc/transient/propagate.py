@@ -221,7 +221,8 @@ def _balanced(M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     1 to 5e5) had a map 7.8e-9 off its largest entry, balanced 1.2e-13 (mpmath), and
     its steady drive force was 4.4e-5 off (crosscheck campaign, seed 3, network 132).
     """
-    Mb, (s, _) = la.matrix_balance(M, permute=False, separate=True)
+    with np.errstate(invalid="ignore"):     # (M not finite: its own NaN, not a cast warning)
+        Mb, (s, _) = la.matrix_balance(M, permute=False, separate=True)
     return (M, np.ones(M.shape[0])) if la.norm(Mb, 1) > 0.5 * la.norm(M, 1) else (Mb, s)
 
 
