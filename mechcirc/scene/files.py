@@ -378,6 +378,10 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     doc = load_toml(text, source)
     check_keys(text, source, TABLES[None], doc)
     linkage = parse_linkage(_hide_scene_tables(text), source)
+    if (w := linkage.cranks[0].omega) < 0:  # (the scene's tables turn it with θ increasing)
+        raise located(text, source, f"the first crank turns at omega = {w:g} rad/s; a scene's "
+                      "first crank turns the positive way", "cranks", "omega", expected=(
+                          "omega > 0; for a clockwise crank mirror the points (y -> -y)"))
     units = _length_unit(text, source, doc)
     if "cam" in doc:                  # a cam swings the first crank (scene/cam.py)
         from .cam import parse_cam

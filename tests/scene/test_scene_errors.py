@@ -273,6 +273,10 @@ TABLE_MOTOR = 'motor = "table"\nspeeds = [0.0, 25.0]\ntorques = [2.0, 0.0]\n'
      ["[simulate] points must be an integer ≥ 16, got 8"]),
     ("revolutions = 4 ", "omega = -1.0\nrevolutions = 4 ", "omega = -1.0",
      ["[simulate] omega must be a finite number > 0, got -1.0"]),
+    # (session 28: it was simulated at +20, the rod forces up to 20 % off a clockwise run)
+    ("omega = 20.0", "omega = -20.0", "omega = -20.0",
+     ["the first crank turns at omega = -20 rad/s; a scene's first crank turns the positive "
+      "way", "mirror the points"]),
     (KLOSS, TABLE_MOTOR.replace("speeds = [0.0, 25.0]\n", ""), 'motor = "table"',
      ["[shaft] a motor table needs speeds = [...]", "(expected speeds = [[rad/s], increasing])"]),
     (KLOSS, TABLE_MOTOR.replace("[0.0, 25.0]", "[25.0, 0.0]"), 'motor = "table"',
