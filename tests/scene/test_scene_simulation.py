@@ -478,3 +478,18 @@ def test_methods_spelt_alike():
     from mechcirc.cli import sley_commands
 
     assert sley_simulation.METHODS is METHODS is sley_commands.METHODS is limits.METHODS
+
+
+def test_the_shipped_sley_scene_is_in_metres():
+    """New-user pass, session 28: docs/examples/sley_scene.toml said units = "mm" with its
+    coordinates in metres (a 29 µm crank), so B's acceleration came out 0.29 m/s² where
+    a 29 mm crank at 100 rad/s has ω² r = 290 m/s² (the crank's speed ripple aside)."""
+    from pathlib import Path
+
+    from mechcirc.scene import load_scene
+
+    scene = load_scene(Path(__file__).resolve().parents[2] / "docs/examples/sley_scene.toml")
+    with warnings.catch_warnings(action="ignore", category=SceneAccuracyWarning):
+        m = simulate_scene(scene, revolutions=1, points=36, error_estimate=False)
+    lo, hi = m.extrema["B.acceleration"]
+    assert 0.95 * 290.0 < lo <= hi < 1.05 * 290.0, (lo, hi)
