@@ -172,10 +172,13 @@ def _cycle(args, scene) -> int:
         return print_json({**cmap.as_dict(), "file": args.file, "output": args.output,
                            "plot": args.plot})
     unit = "N·m" if cmap.rotational else "N"
-    print(f"{args.file}: scene {scene.name!r}, {len(cmap.theta)} crank angles, shaft "
-          f"Ω = {in_unit(cmap.omega_shaft, u):g} {u}")
+    turns = round(cmap.cycle / (2 * math.pi))    # geared: the cycle is this many shaft turns
+    fund = "Ω" if turns == 1 else f"Ω/{turns}"    # the harmonics' fundamental, omega_shaft
+    print(f"{args.file}: scene {scene.name!r}, {len(cmap.theta)} crank angles, shaft Ω = "
+          f"{in_unit(turns * cmap.omega_shaft, u):g} {u}" + (f"; the cycle of {turns} turns "
+          f"repeats at {fund} = {in_unit(cmap.omega_shaft, u):g} {u}" if turns > 1 else ""))
     sym = frequency_symbol(u)
-    print(f"resonances [{u}] and |Q0| [{unit}] at h·Ω:")
+    print(f"resonances [{u}] and |Q0| [{unit}] at h·{fund}:")
     print("  θ [deg]  " + " ".join(f"{sym + '_r' + str(k + 1):>10}" for k in range(W.shape[1]))
           + "  " + " ".join(f"{'|Q0| h=' + str(h):>11}" for h in cmap.harmonics))
     for i, th in enumerate(cmap.theta):
@@ -187,9 +190,9 @@ def _cycle(args, scene) -> int:
         print("a resonance meets a shaft harmonic at:")
         for c in cross:
             print(f"  θ ≈ {c['theta_deg']:7.2f}°: resonance {c['mode'] + 1} = "
-                  f"{c['harmonic']}·Ω = {in_unit(c['omega'], u):g} {u}")
+                  f"{c['harmonic']}·{fund} = {in_unit(c['omega'], u):g} {u}")
     else:
-        print("no resonance meets a harmonic h·Ω (h ≤ "
+        print(f"no resonance meets a harmonic h·{fund} (h ≤ "
               f"{cmap.harmonics[-1]}) over the cycle")
     for path in filter(None, (args.output, args.plot)):
         print(f"wrote {path}")

@@ -148,3 +148,13 @@ def test_a_theta_beyond_the_continuation_limit_says_so_not_that_the_linkage_fail
     err = assert_user_error(["scene", HEALD, "--theta", "1e9"], capsys, "θ = 1e+09°",
                             "the limit is 100000", "a path of 200000° from the pose")
     assert "assembled" not in err and "linearised" not in err
+
+
+def test_a_geared_cycle_map_names_the_shaft_speed_and_its_fundamental(capsys):
+    """New-user pass, session 28: the geared six-bar (first crank 20 rad/s, a cycle of two
+    turns) printed 'shaft Ω = 10 rad/s', the cycle's fundamental, as the shaft's speed."""
+    fnf = Path(__file__).resolve().parents[2] / "examples" / "fnf_sixbar_scene.toml"
+    assert cli.main(["scene", str(fnf), "--cycle", "--points", "4", "--harmonics", "2"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[0].endswith("shaft Ω = 20 rad/s; the cycle of 2 turns repeats at Ω/2 = 10 rad/s")
+    assert out[1].endswith("at h·Ω/2:")
