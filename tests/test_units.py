@@ -63,7 +63,7 @@ def _error(text):
 
 
 @pytest.mark.parametrize("text, line, col, fragment", [
-    ("spring k a 0 5 kg\n" + D, 1, 16, "unit 'kg' is a mass; a spring value needs stiffness"),
+    ("spring k a 0 5 kg\n" + D, 1, 16, "unit 'kg' is a mass; an axial spring value needs stiffness"),
     ("mass m a 0 5 N/m\n" + D, 1, 14, "is a stiffness; a mass value needs"),
     ("damper c a 0 5 N/m\n" + D, 1, 16, "a damper value needs damping"),
     ("mass m a 0 5 kgs\n" + D, 1, 14, "unknown unit 'kgs'"),
@@ -268,7 +268,23 @@ def test_scene_toml_values_take_units(tmp_path):
     p.write_text(text.replace("\nstiffness = 2.0e6\n", '\nstiffness = "2 kg"\n', 1))
     with pytest.raises(NetlistError) as info:
         load_scene(p)
-    assert "a spring value needs stiffness" in info.value.message and info.value.line == 65
+    assert "an axial spring value needs stiffness" in info.value.message and info.value.line == 65
+    # a unit of the other reading, the wrong kind for this element (session 28: read as
+    # 2e6 N/m and 2.5 kg, silently): a torsional rigidity on an axial rod, an inertia at a
+    # point; and each reading where it belongs
+    for old, new, needle in (("\nstiffness = 2.0e6\n", '\nstiffness = "2e6 N*m/rad"\n',
+                              "an axial spring value needs stiffness"),):
+        p.write_text(text.replace(old, new, 1))
+        with pytest.raises(NetlistError, match=needle):
+            load_scene(p)
+    sc = "examples/slider_crank_scene.toml"
+    text = open(sc).read()
+    assert "\nmass = 2.5\n" in text
+    p.write_text(text.replace("\nmass = 2.5\n", '\nmass = "2.5 kg*m^2"\n', 1))
+    with pytest.raises(NetlistError, match="a point mass value needs mass"):
+        load_scene(p)
+    p.write_text(text.replace("\nmass = 2.5\n", '\nmass = "2500 g"\n', 1))
+    assert [m.value for m in load_scene(p).masses if m.kind == "mass"] == [2.5]
 
 
 def test_study_toml_frequencies_take_the_same_grammar():

@@ -336,8 +336,12 @@ def _hide_scene_tables(text: str) -> str:
 
 
 #: The unit in brackets of a value's description -> its role in the unit grammar.
-_ROLE_OF = {"[N/m]": "spring", "[N·m/rad]": "spring", "[N·s/m]": "damper",
-            "[N·m·s/rad]": "damper", "[kg]": "mass", "[kg·m²]": "mass", "[deg]": "angle"}
+#: The unit role of a value by the unit its description names: a point mass takes kg
+#: only, a link's inertia kg·m² only, an axial rod N/m, a torsion rod N·m/rad (a point
+#: mass given 2.5 kg·m² was read as 2.5 kg: session 28).
+_ROLE_OF = {"[N/m]": "axial spring", "[N·m/rad]": "rotary spring", "[N·s/m]": "axial damper",
+            "[N·m·s/rad]": "rotary damper", "[kg]": "point mass", "[kg·m²]": "rotary inertia",
+            "[deg]": "angle"}
 
 
 def _named(value, names) -> TypeGuard[str]:
@@ -378,15 +382,15 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
     doc = load_toml(text, source)
     check_keys(text, source, TABLES[None], doc)
     linkage = parse_linkage(_hide_scene_tables(text), source)
-    if (w := linkage.cranks[0].omega) < 0:  # (the scene's tables turn it with θ increasing)
-        raise located(text, source, f"the first crank turns at omega = {w:g} rad/s; a scene's "
-                      "first crank turns the positive way", "cranks", "omega", expected=(
-                          "omega > 0; for a clockwise crank mirror the points (y -> -y)"))
     units = _length_unit(text, source, doc)
     if "cam" in doc:                  # a cam swings the first crank (scene/cam.py)
         from .cam import parse_cam
 
         linkage = parse_cam(text, source, doc["cam"], linkage)
+    if (w := linkage.cranks[0].omega) < 0:  # (the scene's tables turn it with θ increasing)
+        raise located(text, source, f"the first crank turns at omega = {w:g} rad/s; a scene's "
+                      "first crank turns the positive way", "cranks", "omega", expected=(
+                          "omega > 0; for a clockwise crank mirror the points (y -> -y)"))
     r = _SceneReader(text, source, doc, linkage)
     elastic = r.elastic()
     elastic_links = {x.link for x in elastic}
@@ -967,6 +971,10 @@ def _override(reader: _SceneReader, old, fld: str, value):
     if isinstance(old, Moment):
         return override_moment(reader.source, old, fld, value)
     if isinstance(old, SceneMass):
+        if fld not in ("value", old.kind):      # (a point mass's inertia, a link's mass)
+            raise MechcircError(f"{reader.source}: {old.name!r} is a "
+                                f"{'point mass' if old.kind == 'mass' else 'link inertia'}; "
+                                f"set {old.name}.{old.kind}")
         return replace(old, value=reader.mass({old.kind: value}, 0, old.name))
     entry = asdict(old) | {fld: value}          # as the file would hold it, with the new value
     if isinstance(old, Load):

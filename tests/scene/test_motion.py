@@ -379,7 +379,7 @@ RIPPLE = "[simulate]\nomega_ripple = {{amplitude = {}, harmonic = {}}}\n"
     ("C4.damping", -1.0, "damping = 29.0", "damping = -1.0"),
     ("C2.clearance", -math.inf, "clearance = 0.001", "clearance = -inf"),
     ("I2P.inertia", 0.0, "inertia = 0.005", "inertia = 0.0"),
-    ("I4.mass", -2.0, "inertia = 0.025", "inertia = -2.0"),
+    ("I4.inertia", -2.0, "inertia = 0.025", "inertia = -2.0"),
     ("M4.amplitude", math.inf, "amplitude = -500.0", "amplitude = inf"),
     ("M4.amplitude", "2kN", "amplitude = -500.0", 'amplitude = "2kN"'),    # no unit there
     ("M4.window_deg", 400.0, "window_deg = 10.0", "window_deg = 400.0"),
@@ -405,6 +405,21 @@ def test_set_refuses_what_the_file_refuses_with_its_message(setting, value, old,
     assert (by_set.value.message, by_set.value.expected) == \
         (in_file.value.message, in_file.value.expected)
     assert in_file.value.line > 0 and by_set.value.line == 0
+
+
+@pytest.mark.parametrize("setting, kind", [("I4.mass", "link inertia"),
+                                           ("I4.value", None)])
+def test_set_of_a_mass_takes_its_own_kind(setting, kind):
+    """New-user pass, session 28: --set I4P.mass=1 (a link inertia) and m_block.inertia=1
+    (a point mass) set the value as if the right key were given; the file refuses the
+    wrong key.  Now refused; ``value`` stays the neutral name."""
+    from mechcirc.errors import MechcircError
+
+    if kind is None:
+        assert apply_overrides(_mrazek(), {setting: 0.03}) is not None
+        return
+    with pytest.raises(MechcircError, match=f"'I4' is a {kind}; set I4.inertia"):
+        apply_overrides(_mrazek(), {setting: 1.0})
 
 
 def test_set_takes_what_the_file_takes_and_a_load_keeps_one_of_its_two():
