@@ -63,7 +63,7 @@ def _error(text):
 
 
 @pytest.mark.parametrize("text, line, col, fragment", [
-    ("spring k a 0 5 kg\n" + D, 1, 16, "unit 'kg' is a mass; an axial spring value needs stiffness"),
+    ("spring k a 0 5 kg\n" + D, 1, 16, "unit 'kg' is a mass; a spring value needs stiffness"),
     ("mass m a 0 5 N/m\n" + D, 1, 14, "is a stiffness; a mass value needs"),
     ("damper c a 0 5 N/m\n" + D, 1, 16, "a damper value needs damping"),
     ("mass m a 0 5 kgs\n" + D, 1, 14, "unknown unit 'kgs'"),
