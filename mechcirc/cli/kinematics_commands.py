@@ -165,9 +165,10 @@ def _register_synth_export(p) -> None:
                    help="write DIR/design_K.linkage.toml and DIR/design_K.scene.toml per design")
     p.add_argument("--omega", type=crank_omega, default=Default(100.0), metavar="W",
                    help="crank speed in exported files [rad/s] (default 100)")
-    for name, what, default in _SCENE_OPTIONS:
-        p.add_argument(f"--{name}", type=real(least=None if name == "beat-moment" else 0.0,
-                                              most=1e30),
+    for name, what, default in _SCENE_OPTIONS:     # (inertias and rods > 0: the scene's rule)
+        free, zero = name == "beat-moment", name in ("k2", "k4")
+        p.add_argument(f"--{name}", type=real(least=0.0 if zero else None, most=1e30,
+                                              above=None if free or zero else 0.0),
                        default=Default(default), metavar="X",
                        help=f"exported scene: {what} (default {default:g}, "
                        f"Mrázek's one-side variant 1)")

@@ -245,6 +245,17 @@ def test_synth_export_to_a_missing_folder_is_a_user_error(capsys, tmp_path):
     assert "no such folder" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("option", ["--sley-inertia", "--rocker-inertia", "--crank-inertia",
+                                    "--c2", "--c4", "--beat-window"])
+def test_synth_scene_values_the_scene_refuses_are_refused_as_options(option, capsys):
+    """New-user pass, session 28: '--sley-inertia 0' passed the option's check (>= 0) and
+    was refused later as 'scene I4P must be a positive finite number'."""
+    from cli_helpers import assert_user_error
+
+    assert_user_error(["synth", "--swing", "25", option, "0"], capsys, f"argument {option}",
+                      "must be > 0")
+
+
 def test_synth_fixed_frame_and_ranges_on_the_cli(capsys):
     status, doc = _json(capsys, ["synth", "--load", "medium", "--frame", "165", "--limit", "2",
                                  "--swing-range", "24:26", "--b-a-range", "1.5:2"])
