@@ -286,11 +286,10 @@ def cmd_frame(args) -> int:
               "add --reed-force FX,FY")
     refuse_ignored(args, {"--reed-point": shaped, "--beat-window": shaped,
                           "--reed-force": (True, "", "")})     # (its default)
-    lengths = (args.crank, args.coupler, args.rocker, args.frame)
-    FourBar(*lengths, branch=args.branch)       # refused (if it is) in the lengths typed
+    a, b, c, d = args.crank, args.coupler, args.rocker, args.frame
+    FourBar(a, b, c, d, branch=args.branch)     # refused (if it is) in the lengths typed
     k = 1e-3 if args.unit == "mm" else 1.0            # to metres
-    a, b, c, d = (x * k for x in lengths)
-    fb = FourBar(a, b, c, d, branch=args.branch)
+    fb = FourBar(a * k, b * k, c * k, d * k, branch=args.branch)
     if not fb.is_full_turn_crank_rocker:
         raise MechcircError(
             f"frame loading needs a crank-rocker whose crank turns fully; this four-bar is a "
