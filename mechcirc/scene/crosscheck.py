@@ -169,9 +169,8 @@ def _kick_record(model, theta, found, steps_per_period, periods):
     nsamp = max(int(math.ceil(periods * 2 * math.pi / w_min / (h * sample))) + 1, 4 * n + 4)
     kern, backend = kernels_for("rk4", long=True)     # the forced records take it too
     y0 = model.rigid_state(theta)
-    kick = 1e-7 * rate * np.array([1.0 + 0.37 * i for i in range(n)])
     y = y0.copy()
-    y[n:] += kick
+    y[n:] += 1e-7 * rate * (1.0 + 0.37 * np.arange(n))
     rec_y = _record(model, kern, y, h, sample, nsamp, model.kernel_args(theta, 1e300))[0]
     return rec_y - y0[None, :], h * sample, h, nsamp, kern, backend
 
