@@ -176,10 +176,9 @@ class SleyParameters:
             object.__setattr__(self, name, float(value))
         if not self.alpha < 2 * math.pi:
             raise ParameterError(f"beat-up interval alpha must be < 2π rad, got {self.alpha!r}")
-        if self.branch not in (1, -1):
-            raise ParameterError(f"branch must be +1 or -1, got {self.branch!r}")
-        if self.beat_sign not in (1, -1):
-            raise ParameterError(f"beat_sign must be +1 or -1, got {self.beat_sign!r}")
+        for name in ("branch", "beat_sign"):
+            if getattr(self, name) not in (1, -1):
+                raise ParameterError(f"{name} must be +1 or -1, got {getattr(self, name)!r}")
         fb = self.fourbar()          # raises GeometryError when it cannot be assembled
         if not fb.is_full_turn_crank_rocker:
             raise GeometryError(
