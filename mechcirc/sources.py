@@ -745,8 +745,7 @@ def check_keys(text: str, source: str, table: Table, entry: dict, occurrence: in
         listing the declared keys as what is expected.
     """
     found = unknown_key(table, entry, occurrence)
-    if found is None:
-        return
-    key, message = found
-    raise located(text, source, message, table.name, key, occurrence=occurrence,
-                  expected=table.expected)
+    if found is not None:
+        key, message = found
+        raise located(text, source, message, table.name, key, occurrence=occurrence,
+                      expected=table.expected)
