@@ -384,11 +384,10 @@ def _result(params: SleyParameters, model, m, theta0: float, linkage: list,
     n = len(coord)
     phi2 = theta0 + w * m.time
     cols = []
-    for name in (("crank", "crank5") if both else ("crank",)):
+    for name in (("crank", "crank5") if both else ("crank",)) + ("sley",):
         i = coord.index(name)
-        cols += [m.states[:, i] - phi2, m.states[:, n + i]]
-    i = coord.index("sley")
-    cols += [m.states[:, i] + sley_off, m.states[:, n + i]]
+        offset = sley_off if name == "sley" else -phi2
+        cols += [m.states[:, i] + offset, m.states[:, n + i]]
     scene_extrema = {k: x for k, x in m.extrema.items()
                      if k not in ALIASES["both-sides"] and not k.endswith(".rigid_acceleration")}
     return SleyResult(params=params, crank_angle=m.crank_angle, eps2P=v["eps2P"],
