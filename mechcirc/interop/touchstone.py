@@ -59,11 +59,10 @@ def _parse_options(tokens: list[str], source: str, line: int, col: int) -> tuple
             if value is None:
                 raise NetlistError("option 'R' has no reference value", source, line, col,
                                    "'R <positive number>'")
-            try:
-                R = float(value)
-            except ValueError:
+            if not is_number(value):
                 raise NetlistError(f"reference {value!r} is not a number", source, line,
-                                   col, "'R <positive number>'") from None
+                                   col, "'R <positive number>'")
+            R = float(value)
             if not (math.isfinite(R) and R > 0):
                 raise NetlistError(f"reference R = {value} must be finite and positive",
                                    source, line, col, "'R <positive number>'")
@@ -153,12 +152,11 @@ def _data_line(stripped: str, options, source: str, number: int, col: int,
     if len(fields) != 3:
         raise NetlistError(f"data line has {len(fields)} numbers", source, number, col,
                            "3 numbers for a one-port: frequency and two parts of one value")
-    try:
-        f, a, b = (float(x) for x in fields)
-    except ValueError:
-        bad = next(x for x in fields if not is_number(x))
+    bad = next((x for x in fields if not is_number(x)), None)
+    if bad is not None:
         raise NetlistError(f"{bad!r} is not a number", source, number,
-                           col + stripped.find(bad), "a decimal number") from None
+                           col + stripped.find(bad), "a decimal number")
+    f, a, b = (float(x) for x in fields)
     if not all(math.isfinite(x) for x in (f, a, b)):
         raise NetlistError("data line has a number that is not finite", source, number, col,
                            "finite numbers")
