@@ -159,11 +159,6 @@ def _options(args) -> dict:
 _READINGS = {"alpha", "sigma", "beat_sign"}
 
 
-def _paper_applies(over: dict) -> bool:
-    """The paper computed this case: no parameter was changed but the readings."""
-    return set(over) <= _READINGS
-
-
 def _table(result, paper_applies: bool = True) -> str:
     from ..sley import PAPER
 
@@ -231,6 +226,7 @@ def cmd_simulate(args) -> int:
     over = _overrides(args)
     if args.omega is not None:
         over["omega"] = args.omega
+    paper_applies = set(over) <= _READINGS     # the paper computed this case
     opts = _options(args)
     if args.variant == "all":
         if args.output or args.plot:
@@ -238,7 +234,7 @@ def cmd_simulate(args) -> int:
         results = simulate_batch(all_presets(**over), args.revolutions, args.method, **opts)
         if args.json:
             return print_json({"results": [r.summary() for r in results]})
-        print("\n\n".join(_table(r, _paper_applies(over)) for r in results))
+        print("\n\n".join(_table(r, paper_applies) for r in results))
         return 0
     try:
         variant = int(args.variant)
@@ -254,10 +250,10 @@ def cmd_simulate(args) -> int:
                   f"alpha = {result.alpha_deg:g} deg; method {result.method}")
     if args.json:
         doc = result.summary()
-        if _paper_applies(over):
+        if paper_applies:
             doc["paper"] = {k: list(v) for k, v in PAPER[params.drive][variant].items()}
         return print_json(doc)
-    print(_table(result, _paper_applies(over)))
+    print(_table(result, paper_applies))
     return 0
 
 
