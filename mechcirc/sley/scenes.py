@@ -91,13 +91,11 @@ def _sley_linkage(p: SleyParameters, name: str, source: str):
                                                     if p.drive == "both-sides" else [])
     pose: dict = {}
     links: dict = {}
-    ground: tuple[str, ...] = ()
-    cranks: tuple[Crank, ...] = ()
     for n, a, b, c, d, rocker in sides:
         pose.update({a: (0.0, 0.0), b: (p.l2P, 0.0), c: C, d: (p.d, 0.0)})
         links.update({"crank" + n: (a, b), "coupler" + n: (b, c), rocker: (d, c)})
-        ground += (a, d)
-        cranks += (Crank("crank" + n, a, float(p.omega)),)
+    ground = tuple(pivot for _, a, _, _, d, _ in sides for pivot in (a, d))
+    cranks = tuple(Crank("crank" + n, a, float(p.omega)) for n, a, *_ in sides)
     return Linkage(name, {k: np.array(v, dtype=float) for k, v in pose.items()}, ground,
                    links, cranks, source, "m")
 
