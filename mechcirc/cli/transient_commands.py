@@ -77,9 +77,7 @@ def cmd_transient(args) -> int:
         print(f"note: {n}", file=sys.stderr)
     print(f"{circuit.name}: {result.time.size} samples, t = 0 .. {result.time[-1]:.6g} s; "
           f"{result.method}; estimated error of x {result.error:.3g}")
-    from ..circuit import units_of
-
-    u = units_of(circuit.drive)
+    u = result.units
     w = max([10] + [len(n) for n in result.nodes + result.elements])
     print(f"{'node':>{w}} {'x(end) [' + u['x'] + ']':>14} {'v(end) [' + u['v'] + ']':>14} "
           f"{'max|x| [' + u['x'] + ']':>14}")
