@@ -335,10 +335,9 @@ def _hide_scene_tables(text: str) -> str:
     return "\n".join(out) + "\n"
 
 
-#: The unit in brackets of a value's description -> its role in the unit grammar.
-#: The unit role of a value by the unit its description names: a point mass takes kg
-#: only, a link's inertia kg·m² only, an axial rod N/m, a torsion rod N·m/rad (a point
-#: mass given 2.5 kg·m² was read as 2.5 kg: session 28).
+#: The unit in brackets of a value's description -> its role in the unit grammar: a point
+#: mass takes kg only, a link's inertia kg·m² only, an axial rod N/m, a torsion rod
+#: N·m/rad (a point mass given 2.5 kg·m² was read as 2.5 kg: session 28).
 _ROLE_OF = {"[N/m]": "axial spring", "[N·m/rad]": "rotary spring", "[N·s/m]": "axial damper",
             "[N·m·s/rad]": "rotary damper", "[kg]": "point mass", "[kg·m²]": "rotary inertia",
             "[deg]": "angle"}
