@@ -349,7 +349,8 @@ def simulate_params(params: SleyParameters, revolutions: int = 5, method: str | 
         notes.append("beat-up moment enters the sley equation as " +
                      ("-M4 (eq. 4 as printed)" if params.beat_sign < 0 else
                       "+M4 (beat_sign=+1: along the rigid acceleration at beat-up)"))
-    with warnings.catch_warnings(record=True, action="always", category=SceneAccuracyWarning) as caught:
+    with warnings.catch_warnings(record=True, action="always",
+                                 category=SceneAccuracyWarning) as caught:
         m = simulate_scene(scene, model=model, revolutions=revolutions, revolution=revolution,
                            start_deg=math.degrees(theta0), steps_per_period=steps_per_period,
                            points=points_per_revolution, method=method, rtol=rtol,
