@@ -274,7 +274,7 @@ def units_of(drive: Drive | bool | None) -> dict[str, str]:
     -------
     dict[str, str]
     """
-    if drive if isinstance(drive, bool) else drive is not None and drive.rotational:
+    if _rotary(drive):
         return {"v": "rad/s", "Q": "N·m", "x": "rad", "K": "rad/(N·m·s)"}
     return {"v": "m/s", "Q": "N", "x": "m", "K": "m/(N·s)"}
 
@@ -296,7 +296,12 @@ def element_unit(kind: str, drive: Drive | bool | None) -> str:
     str
     """
     law = LAWS[kind]
-    return law.rotary_unit if units_of(drive)["Q"] == "N·m" else law.unit
+    return law.rotary_unit if _rotary(drive) else law.unit
+
+
+def _rotary(drive: Drive | bool | None) -> bool:
+    """Whether labels are rotary: ``drive.rotational``, or ``drive`` itself when a bool."""
+    return drive if isinstance(drive, bool) else drive is not None and drive.rotational
 
 
 @dataclass(frozen=True)
