@@ -470,6 +470,9 @@ DEFAULT_METHOD = "rk8"
 #: Steps per cycle of the rigid shaft for each step per period (it has no elastic mode).
 RIGID_STEPS = 16
 
+#: Fixed steps a cycle at most; beyond, DOP853 (adaptive) integrates the cycle.
+MAX_STEPS = 2 ** 16
+
 #: Right-hand side evaluations one cycle of the shaft may take.
 MAX_CALLS = 200_000
 
@@ -680,7 +683,8 @@ def _how(method: str, steps: int, rtol: float, cycles: int) -> str:
     """The note of how :func:`simulate_shaft` integrated the steady cycle and start-up."""
     how = f"{method.upper()} in θ, {steps} steps a cycle" if steps else \
         f"DOP853 in θ, rtol {rtol:g}"
-    return f"steady cycle by shooting ({how}); start-up from rest over {cycles} cycles"
+    return (f"steady cycle by shooting ({how}); start-up from rest over {cycles} "
+            f"cycle{'s' * (cycles != 1)}")
 
 
 def _checked_method(method, steps_per_period) -> float | None:
@@ -720,20 +724,27 @@ def _steady_cycle(scene, eq, req, motor, th0, rtol, scale, mean_load, peak, note
         raise MechcircError(
             f"{scene.source}: no steady cycle: the motor (largest torque "
             f"{motor.peak_torque:.6g} N·m) cannot keep the mechanism turning against the mean "
-            f"load torque {mean_load:.6g} N·m, peak {peak:.6g} N·m, with flywheel "
+            f"load torque {mean_load + 0.0:.6g} N·m, peak {peak + 0.0:.6g} N·m, with flywheel "
             f"{eq.Jf:g} kg·m²")
+    guess, th = _balance(motor, mean_load, scale), th0 + np.linspace(0.0, cyc, 2048, False)
     if spp is not None:
-        req.tableau, req.steps = eq.tableau, max(int(math.ceil(RIGID_STEPS * spp)), 64)
+        req.tableau = eq.tableau
+        req.steps = _stable(req, cyc, th, 0.5 * guess, max(int(math.ceil(RIGID_STEPS * spp)), 64))
     w0 = _steady_speed(req, th0, cyc,
                        max(rtol, 1e-5) if eq.n else rtol, scale,     # elastic: a first guess
-                       _balance(motor, mean_load, scale), fail, 1e-5 if eq.n else 1e-13)
+                       guess, fail, 1e-5 if eq.n else 1e-13)
     x0 = np.array([w0])
     if eq.n and spp is not None:
-        eq.steps = max(int(math.ceil(cyc * max_rate(eq.model) * spp / (2 * math.pi * w0))), 64)
+        eq.steps = _stable(eq, cyc, th, w0, max(int(math.ceil(
+            cyc * max_rate(eq.model) * spp / (2 * math.pi * w0))), 64))
+    if spp is not None and not eq.steps:
+        notes.append(f"DOP853 in θ: the shaft's speed relaxes too fast for fixed steps (more "
+                     f"than {MAX_STEPS} a cycle; a small flywheel)")
+    if eq.n and eq.steps:
         backend = "compiled" if getattr(eq.run_kern, "HAVE_NUMBA", False) else "Python copy"
         name = "RK8" if eq.tableau[3] else "RK4"
-        notes.append(f"{name} in θ with the elastic parts, {eq.steps} steps a cycle ({spp:g} "
-                     f"per period of the fastest mode), {backend}")
+        notes.append(f"{name} in θ with the elastic parts, {eq.steps} steps a cycle (at "
+                     f"least {spp:g} per period of the fastest mode), {backend}")
     if eq.n:
         x0, resid = _steady_state(eq, th0, cyc, w0, rtol, scale)
         notes.append(f"elastic steady cycle: {2 * eq.n} elastic states beside θ̇, cycle map "
@@ -743,6 +754,20 @@ def _steady_cycle(scene, eq, req, motor, th0, rtol, scale, mean_load, peak, note
         raise SolverError(f"{scene.source}: the steady cycle stalls at θ = "
                           f"{math.degrees(sol.t[-1]):.6g}°", status="stalled")
     return x0, sol
+
+
+def _stable(eq, cyc, th, w, steps):
+    """``steps`` a cycle of the fixed-step method, or more, so that each step's h·λ stays
+    within half its real-axis stability limit (RK4 2.785, RK8 6.39): λ = |∂(θ̈/θ̇)/∂θ̇|, the
+    relaxation of the shaft's speed in θ, at crank rotations ``th`` and speed ``w`` (fast
+    where a small flywheel leaves little inertia against the motor's slope); 0 (DOP853,
+    adaptive) beyond :data:`MAX_STEPS`."""
+    z = np.array([eq.rest(t, w) for t in th]) if eq.n else np.empty((th.size, 0))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = [eq.evaluate(th, v, z)[:, -5] / v for v in (w, w * (1 + 1e-6))]
+        n = cyc * float(np.max(np.abs(a[1] - a[0]))) / (1e-6 * w) / (
+            3.2 if eq.tableau[3] else 1.39)
+    return max(steps, int(math.ceil(n))) if n <= MAX_STEPS else 0
 
 
 def _tabulate(scene, eq, sol, th0, cyc, points):
