@@ -1826,7 +1826,18 @@ def _secant_designs(p, w0: np.ndarray, pole: np.ndarray, e0: np.ndarray):
             dg = 4 * np.maximum(rho * np.abs(g), _EPS * np.abs(g))
         return g, dg
 
+    spacing = row_spacing(w0, pole)
     w, err = secant_steps(g_and_delta, lambda c: (c, np.isfinite(c) & (c > 0)), w_safe,
-                          np.nan_to_num(e0, nan=0.0), 1, have,
-                          spacing=row_spacing(w0, pole))
+                          np.nan_to_num(e0, nan=0.0), 1, have, spacing=spacing)
+    # A start within rounding of the root has no digit of g, and the secant no step: the
+    # root is bracketed where g is known on both sides, with opposite signs, 1e-15 … 1e-9
+    # off (no pole of g between: a quarter of the spacing at most)
+    lost = have & ~np.isfinite(err)
+    for rel in np.logspace(-15, -9, 13):
+        if not lost.any():
+            break
+        (g1, d1), (g2, d2) = (g_and_delta(w_safe * (1 + x)) for x in (-rel, rel))
+        sure = lost & (np.abs(g1) > d1) & (np.abs(g2) > d2) & (g1 * g2 < 0) & (
+            4 * rel * w_safe < spacing)
+        w, err, lost = np.where(sure, w_safe, w), np.where(sure, rel, err), lost & ~sure
     return np.where(have, w, np.nan), np.where(have, err, np.nan)
