@@ -27,12 +27,11 @@ def register(p) -> None:
     p.add_argument("--t-end", type=seconds, required=True, metavar="T",
                    help="end time [s]; or with a unit: 50ms")
     p.add_argument("--dt", type=seconds, metavar="DT",
-                   help="output step [s] (default t_end/2000; 40 per period of a harmonic "
-                        "drive)")
+                   help="output step [s] (default t_end/2000; 40 per period of a harmonic drive)")
     p.add_argument("--waveform", metavar="WAVE",
-                   help="the drive's waveform in time: harmonic:OMEGA (rad/s, or with a unit: 50Hz), step, impulse, "
-                        "csv:PATH (time,value samples, interpolated linearly) or rest "
-                        "(default: the drive stays at rest)")
+                   help="the drive's waveform in time: harmonic:OMEGA (rad/s, or with a unit: "
+                        "50Hz), step, impulse, csv:PATH (time,value samples, interpolated "
+                        "linearly) or rest (default: the drive stays at rest)")
     p.add_argument("--rpm", type=shaft_speed, metavar="RPM",
                    help="shaft speed [rev/min] of a drive given by its motion over a "
                         "revolution (drive ... motion=LAW or motion=TABLE.csv); required "
