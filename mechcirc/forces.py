@@ -25,6 +25,23 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["ElementForce", "element_forces"]
 
 
+def _phase_deg(z: complex) -> float:
+    if not math.isfinite(abs(z)):
+        return math.nan
+    deg = math.degrees(cmath.phase(z))
+    # Rounding can leave a real negative number a hair below the cut: -180 -> 180.
+    return 180.0 if deg <= -180.0 + 1e-9 else deg + 0.0
+
+
+#: The rest of the docstring of a phase attribute of :class:`ElementForce`.
+_PHASE = "[deg] in (−180, 180], relative to the drive's amplitude."
+
+
+def _derived(field: str, of, doc: str) -> property:
+    """A read-only attribute computed from a field: ``of(self.<field>)``, documented ``doc``."""
+    return property(lambda self: of(getattr(self, field)), doc=doc)
+
+
 @dataclass(frozen=True)
 class ElementForce:
     """Force and velocity of one element at one ω.
@@ -49,33 +66,10 @@ class ElementForce:
     v: complex
     share: float
 
-    @property
-    def Q_abs(self) -> float:
-        """|Q| [N]."""
-        return abs(self.Q)
-
-    @property
-    def v_abs(self) -> float:
-        """|v| [m/s]."""
-        return abs(self.v)
-
-    @property
-    def Q_phase_deg(self) -> float:
-        """arg Q [deg] in (−180, 180], relative to the drive's amplitude."""
-        return _phase_deg(self.Q)
-
-    @property
-    def v_phase_deg(self) -> float:
-        """arg v [deg] in (−180, 180], relative to the drive's amplitude."""
-        return _phase_deg(self.v)
-
-
-def _phase_deg(z: complex) -> float:
-    if not math.isfinite(abs(z)):
-        return math.nan
-    deg = math.degrees(cmath.phase(z))
-    # Rounding can leave a real negative number a hair below the cut: -180 -> 180.
-    return 180.0 if deg <= -180.0 + 1e-9 else deg + 0.0
+    Q_abs = _derived("Q", abs, "|Q| [N].")
+    v_abs = _derived("v", abs, "|v| [m/s].")
+    Q_phase_deg = _derived("Q", _phase_deg, "arg Q " + _PHASE)
+    v_phase_deg = _derived("v", _phase_deg, "arg v " + _PHASE)
 
 
 def element_forces(circuit: Circuit, omega: float, *, method: Method = "auto"

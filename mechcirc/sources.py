@@ -262,6 +262,7 @@ def real_number(value) -> bool:
     Parameters
     ----------
     value : object
+        The argument, of any type.
 
     Returns
     -------
@@ -277,6 +278,7 @@ def positive_number(value) -> bool:
     Parameters
     ----------
     value : object
+        The argument, of any type: a number or not, finite or not.
 
     Returns
     -------

@@ -367,6 +367,7 @@ def is_bare_number(text: str) -> bool:
     Parameters
     ----------
     text : str
+        A value as typed (a word of the command line, a ``--set`` value).
 
     Returns
     -------
@@ -446,6 +447,7 @@ def parse_omega(text: str) -> float:
     Parameters
     ----------
     text : str
+        A number, with or without a unit of frequency (rad/s, Hz, rpm, ...).
 
     Returns
     -------

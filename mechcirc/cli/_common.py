@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import errno
+import functools
 import math
 import os
 import signal
@@ -315,6 +316,34 @@ def add_command(sub, name: str, summary: str, description: str, example: str, *,
     return p
 
 
+def command(name: str, summary: str, description: str, example: str, *,
+            file: str | None = None, raw: bool = True):
+    """Decorate ``options(p)``, which adds a command's options to its parser ``p``: the
+    result, ``register(sub)``, starts the parser with :func:`add_command` (the arguments
+    are its own) and calls ``options`` on it.
+
+    Parameters
+    ----------
+    name, summary, description, example : str
+        The command and its texts, as :func:`add_command` takes them.
+    file : str, optional
+        Help of a positional ``file`` argument.
+    raw : bool, optional
+        Print the description and example as written (True) or re-wrapped.
+
+    Returns
+    -------
+    callable
+        The decorator.
+    """
+    def decorate(options):
+        @functools.wraps(options)
+        def register(sub) -> None:
+            options(add_command(sub, name, summary, description, example, file=file, raw=raw))
+        return register
+    return decorate
+
+
 def add_handler(p, func, *, json: bool = True) -> None:
     """A command's handler and its ``--json`` option, listed in its help where this is called:
     last, after the other options, unless the command adds more after it.
@@ -331,6 +360,26 @@ def add_handler(p, func, *, json: bool = True) -> None:
     if json:
         p.add_argument("--json", action="store_true", help="print one JSON document")
     p.set_defaults(func=func)
+
+
+def commands(*adders):
+    """A module's ``register(sub)``: each of ``adders`` adds its command to ``sub``, in the
+    order ``mechcirc --help`` lists them.
+
+    Parameters
+    ----------
+    *adders : callable
+        Each takes the sub-command table (``argparse._SubParsersAction``) and adds one
+        command's parser to it.
+
+    Returns
+    -------
+    callable
+    """
+    def register(sub) -> None:
+        for add in adders:
+            add(sub)
+    return register
 
 
 # ------------------------------------------------------------------ shared options

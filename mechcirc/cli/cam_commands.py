@@ -6,9 +6,8 @@ import math
 
 from ..errors import InputError
 from ..units import UnitError, in_unit_of
-from ._common import (MAX_LENGTH, add_command, add_handler, add_output_option,
-                      check_output_paths, count, print_json, real, refuse_ignored,
-                      warning_lines)
+from ._common import (MAX_LENGTH, add_handler, add_output_option, check_output_paths, command,
+                      count, print_json, real, refuse_ignored, warning_lines)
 
 _LAWS = ("harmonic", "cycloidal", "modified_sine", "modified_trapezoid", "polynomial_345")
 #: Cam angles in degrees, or with a unit of the one grammar (2rad).
@@ -26,17 +25,16 @@ def _stroke(text: str) -> str:
     return text
 
 
-def register(sub) -> None:
-    p = add_command(
-        sub, "cam", "disc cam profile, pressure angle, radius of curvature, undercut; CSV/SVG",
-        "Profile of a disc cam turning counter-clockwise and driving a translating roller, a "
-        "translating flat face, an oscillating roller or an oscillating flat face (through the "
-        "arm's pivot) follower, from a motion law cycle (rise, dwell, return, and the rest of the "
-        "turn dwelling at the bottom) or a lift table. Lengths in mm, angles in degrees, or with "
-        "a unit (4cm, 2rad); the stroke and a table's lift are in mm, or degrees of the arm for "
-        "--follower oscillating and oscillating_flat. See docs/kinematics.md, 'Cams'.",
-        "Example: mechcirc cam --law cycloidal --rise 120 --dwell 60 --return 120 --stroke 20 "
-        "--base-radius 40 --roller-radius 10 -o profile.csv --svg profile.svg")
+@command("cam", "disc cam profile, pressure angle, radius of curvature, undercut; CSV/SVG",
+         "Profile of a disc cam turning counter-clockwise and driving a translating roller, a "
+         "translating flat face, an oscillating roller or an oscillating flat face (through the "
+         "arm's pivot) follower, from a motion law cycle (rise, dwell, return, and the rest of the "
+         "turn dwelling at the bottom) or a lift table. Lengths in mm, angles in degrees, or with "
+         "a unit (4cm, 2rad); the stroke and a table's lift are in mm, or degrees of the arm for "
+         "--follower oscillating and oscillating_flat. See docs/kinematics.md, 'Cams'.",
+         "Example: mechcirc cam --law cycloidal --rise 120 --dwell 60 --return 120 --stroke 20 "
+         "--base-radius 40 --roller-radius 10 -o profile.csv --svg profile.svg")
+def register(p) -> None:
     src = p.add_mutually_exclusive_group(required=True)
     src.add_argument("--law", choices=_LAWS, help="motion law of the rise (and the return)")
     src.add_argument("--motion", metavar="CSV",

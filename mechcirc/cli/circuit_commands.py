@@ -17,11 +17,11 @@ from ..limits import (
     MAX_SWEEP_POINTS,
 )
 from ..units import FREQUENCY_UNITS, in_unit
-from ._common import (NETLIST_FILE, Default, add_command, add_handler, add_method_option,
-                      add_output_option, add_plot_option, add_unit_option, check_names,
-                      check_output_paths, fields_of, frequency_text, load_with_warnings,
-                      own_units, positive_omega, print_json, print_written, real, refuse_ignored,
-                      save_figure, warning_lines)
+from ._common import (NETLIST_FILE, Default, add_handler, add_method_option, add_output_option,
+                      add_plot_option, add_unit_option, check_names, check_output_paths, command,
+                      commands, fields_of, frequency_text, load_with_warnings, own_units,
+                      positive_omega, print_json, print_written, real, refuse_ignored, save_figure,
+                      warning_lines)
 
 #: argparse type: an angular frequency [rad/s], or with a unit (``50Hz``, ``3000rpm``); the
 #: command checks the range (a sweep's --omega-min/--omega-max together).
@@ -29,30 +29,23 @@ omega_value = real(unit="rad/s", role="omega", finite=False)
 omega_value.__name__ = "frequency"
 
 
-def register(sub) -> None:
-    for add in (_register_check, _register_sweep, _register_resonances):
-        add(sub)
-
-
-def _register_check(sub) -> None:
-    p = add_command(
-        sub, "check", "parse a netlist and show its elements and reduction tree",
-        "Parse a netlist, list elements and nodes, warnings, and the series–parallel reduction "
-        "tree seen from the drive.",
-        "Example: mechcirc check netlists/stb_heald.mcir", file=NETLIST_FILE)
+@command("check", "parse a netlist and show its elements and reduction tree",
+         "Parse a netlist, list elements and nodes, warnings, and the series–parallel reduction "
+         "tree seen from the drive.",
+         "Example: mechcirc check netlists/stb_heald.mcir", file=NETLIST_FILE)
+def _register_check(p) -> None:
     add_handler(p, cmd_check)
     p.add_argument("--explain", action="store_true",
                    help="write the series–parallel reduction out step by step, with the "
                         "lever reflections (K/r², m·r²) and each element's value·η")
 
 
-def _register_sweep(sub) -> None:
-    p = add_command(
-        sub, "sweep", "K(ω) and Q0(ω) over a frequency range",
-        "Sweep the kinematic characteristic K = v/Q [m/(N·s)] and the force amplitude Q0 = V0/K "
-        "[N] over ω [rad/s].",
-        "Example: mechcirc sweep netlists/stb_heald.mcir --omega-min 10 --omega-max 1e4 --points "
-        "400 --log -o K.csv --plot K.png", file=NETLIST_FILE, raw=False)
+@command("sweep", "K(ω) and Q0(ω) over a frequency range",
+         "Sweep the kinematic characteristic K = v/Q [m/(N·s)] and the force amplitude Q0 = V0/K "
+         "[N] over ω [rad/s].",
+         "Example: mechcirc sweep netlists/stb_heald.mcir --omega-min 10 --omega-max 1e4 --points "
+         "400 --log -o K.csv --plot K.png", file=NETLIST_FILE, raw=False)
+def _register_sweep(p) -> None:
     p.add_argument("--omega-min", type=omega_value, required=True, metavar="W1",
                    help="lowest angular frequency [rad/s]; or with a unit: 5Hz, 300rpm")
     p.add_argument("--omega-max", type=omega_value, required=True, metavar="W2",
@@ -92,14 +85,13 @@ def _register_sweep(sub) -> None:
     add_handler(p, cmd_sweep)
 
 
-def _register_resonances(sub) -> None:
-    p = add_command(
-        sub, "resonances", "exact resonances (K = 0) and anti-resonances (K = ∞)",
-        "Natural frequencies seen from the drive, from the network's matrices: resonances (K = 0, "
-        "Q0 → ∞ under kinematic excitation; the drive held) and anti-resonances (K → ∞; the drive "
-        "released). Damped networks also get the damping ratio.",
-        "Example: mechcirc resonances netlists/stb_heald.mcir --omega-max 5000",
-        file=NETLIST_FILE, raw=False)
+@command("resonances", "exact resonances (K = 0) and anti-resonances (K = ∞)",
+         "Natural frequencies seen from the drive, from the network's matrices: resonances (K = 0, "
+         "Q0 → ∞ under kinematic excitation; the drive held) and anti-resonances (K → ∞; the drive "
+         "released). Damped networks also get the damping ratio.",
+         "Example: mechcirc resonances netlists/stb_heald.mcir --omega-max 5000",
+         file=NETLIST_FILE, raw=False)
+def _register_resonances(p) -> None:
     p.add_argument("--omega-max", type=positive_omega, metavar="W",
                    help="report only up to this angular frequency [rad/s]; or with a unit: "
                         "50Hz, 3000rpm")
@@ -114,6 +106,9 @@ def _register_resonances(sub) -> None:
     add_plot_option(p, "plot the mode shapes (PNG, SVG or PDF)")
     add_unit_option(p)
     add_handler(p, cmd_resonances)
+
+
+register = commands(_register_check, _register_sweep, _register_resonances)
 
 
 def _tree_text(circuit) -> str:

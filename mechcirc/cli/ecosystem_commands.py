@@ -6,26 +6,20 @@ from pathlib import Path
 
 from ..errors import MechcircError, did_you_mean
 from ..limits import FORMULA_SECONDS
-from ._common import (NETLIST_FILE, Default, add_command, add_handler, add_method_option,
-                      add_output_option, add_plot_option, add_unit_option, band_omega,
-                      check_output_paths, count, fields_of, frequency_text, load_with_warnings,
-                      own_units, positive_omega, print_json, print_written, real, refuse_ignored,
-                      save_figure, time_limit, warning_lines)
+from ._common import (NETLIST_FILE, Default, add_handler, add_method_option, add_output_option,
+                      add_plot_option, add_unit_option, band_omega, check_output_paths, command,
+                      commands, count, fields_of, frequency_text, load_with_warnings, own_units,
+                      positive_omega, print_json, print_written, real, refuse_ignored, save_figure,
+                      time_limit, warning_lines)
 
 
-def register(sub) -> None:
-    for add in (_register_forces, _register_compare, _register_formula, _register_study):
-        add(sub)
-
-
-def _register_forces(sub) -> None:
-    p = add_command(
-        sub, "forces", "force and velocity of every element at one frequency",
-        "How the drive's force splits through the mechanism: |Q| [N], |v| [m/s] and their phases "
-        "[deg] (relative to the drive's amplitude) for every element carrying force, at one "
-        "angular frequency.",
-        "Example: mechcirc forces netlists/stb_heald.mcir --omega 300 --plot forces.png",
-        file=NETLIST_FILE)
+@command("forces", "force and velocity of every element at one frequency",
+         "How the drive's force splits through the mechanism: |Q| [N], |v| [m/s] and their phases "
+         "[deg] (relative to the drive's amplitude) for every element carrying force, at one "
+         "angular frequency.",
+         "Example: mechcirc forces netlists/stb_heald.mcir --omega 300 --plot forces.png",
+         file=NETLIST_FILE)
+def _register_forces(p) -> None:
     p.add_argument("--omega", type=positive_omega, required=True, metavar="W",
                    help="angular frequency: rad/s, or with a unit: 50Hz, 3000rpm")
     add_unit_option(p, "show the frequency in rad/s (omega, the default), Hz or rpm (--json "
@@ -41,14 +35,13 @@ def _method_plot_json(p, plot: str, func) -> None:
     add_handler(p, func)
 
 
-def _register_compare(sub) -> None:
-    p = add_command(
-        sub, "compare", "a measured mobility (Touchstone .s1p) against the model's",
-        "Read a measured one-port mobility from a Touchstone file (its Z parameter, read with "
-        "scikit-rf, taken in m/(N·s)), evaluate the netlist at the same frequencies and print the "
-        "error in the band.",
-        "Example: mechcirc compare netlists/stb_heald.mcir measured.s1p --plot cmp.png",
-        file=NETLIST_FILE, raw=False)
+@command("compare", "a measured mobility (Touchstone .s1p) against the model's",
+         "Read a measured one-port mobility from a Touchstone file (its Z parameter, read with "
+         "scikit-rf, taken in m/(N·s)), evaluate the netlist at the same frequencies and print the "
+         "error in the band.",
+         "Example: mechcirc compare netlists/stb_heald.mcir measured.s1p --plot cmp.png",
+         file=NETLIST_FILE, raw=False)
+def _register_compare(p) -> None:
     p.add_argument("measured", help="Touchstone one-port file (.s1p)")
     p.add_argument("--omega-min", type=band_omega, metavar="W1",
                    help="compare only from this angular frequency [rad/s] (or 5Hz, 300rpm)")
@@ -57,15 +50,14 @@ def _register_compare(sub) -> None:
     _method_plot_json(p, "overlay |K| and phase (PNG, SVG or PDF)", cmd_compare)
 
 
-def _register_formula(sub) -> None:
-    p = add_command(
-        sub, "formula", "K(ω) in closed form (SymPy), nested as the reduction tree",
-        "The kinematic characteristic K(ω) [m/(N·s)] as a formula built from the series–parallel "
-        "reduction tree: elements written as plain numbers become symbols named after them, "
-        ".param names stay symbols; the values are listed below. Needs SymPy (pip install "
-        "'mechcirc[formula]').",
-        "Example: mechcirc formula netlists/stb_heald.mcir --latex",
-        file=NETLIST_FILE, raw=False)
+@command("formula", "K(ω) in closed form (SymPy), nested as the reduction tree",
+         "The kinematic characteristic K(ω) [m/(N·s)] as a formula built from the series–parallel "
+         "reduction tree: elements written as plain numbers become symbols named after them, "
+         ".param names stay symbols; the values are listed below. Needs SymPy (pip install "
+         "'mechcirc[formula]').",
+         "Example: mechcirc formula netlists/stb_heald.mcir --latex",
+         file=NETLIST_FILE, raw=False)
+def _register_formula(p) -> None:
     p.add_argument("--latex", action="store_true", help="print LaTeX instead of SymPy text")
     p.add_argument("--expand", action="store_true",
                    help="one fraction, numerator and denominator multiplied out")
@@ -74,16 +66,15 @@ def _register_formula(sub) -> None:
     add_handler(p, cmd_formula, json=False)
 
 
-def _register_study(sub) -> None:
-    p = add_command(
-        sub, "study", "a parameter grid or sample, on local cores or a Dask cluster",
-        "Run a parameter study described by a TOML file (see docs/ecosystem.md): a grid, a "
-        "random, Latin hypercube or Sobol sample, or the points of a CSV/Parquet file; each point "
-        "re-parses the netlist with new .param values and records a sweep summary or a resonance "
-        "table; failed points are rows with their error.  Rows are journalled as they finish (an "
-        "interrupted study keeps them; --resume runs only the missing points of the same spec).  "
-        "The output records the spec and every column's unit (CSV: OUTPUT.meta.json beside it).",
-        "Example: mechcirc study examples/study_stb.toml -o results.csv", raw=False)
+@command("study", "a parameter grid or sample, on local cores or a Dask cluster",
+         "Run a parameter study described by a TOML file (see docs/ecosystem.md): a grid, a "
+         "random, Latin hypercube or Sobol sample, or the points of a CSV/Parquet file; each point "
+         "re-parses the netlist with new .param values and records a sweep summary or a resonance "
+         "table; failed points are rows with their error.  Rows are journalled as they finish (an "
+         "interrupted study keeps them; --resume runs only the missing points of the same spec).  "
+         "The output records the spec and every column's unit (CSV: OUTPUT.meta.json beside it).",
+         "Example: mechcirc study examples/study_stb.toml -o results.csv", raw=False)
+def _register_study(p) -> None:
     p.add_argument("spec", help="study description (.toml)")
     add_output_option(p, "write the table to this CSV file")
     p.add_argument("--scheduler", metavar="ADDRESS",
@@ -107,6 +98,9 @@ def _register_study(sub) -> None:
                    help="the column to plot (default Q0_abs_max for sweeps, resonance_1 "
                         "for resonance tables)")
     add_handler(p, cmd_study)
+
+
+register = commands(_register_forces, _register_compare, _register_formula, _register_study)
 
 
 def cmd_forces(args) -> int:

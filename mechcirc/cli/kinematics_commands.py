@@ -9,8 +9,8 @@ from pathlib import Path
 
 from ..errors import InputError, MechcircError, NetlistError
 from ..units import convert_frequency
-from ._common import (MAX_LENGTH, MAX_OMEGA, Default, add_command, add_handler, add_output_option,
-                      add_plot_option, check_output_paths, count, crank_angle, print_json,
+from ._common import (MAX_LENGTH, MAX_OMEGA, Default, add_handler, add_output_option,
+                      add_plot_option, check_output_paths, command, count, crank_angle, print_json,
                       print_written, real, refuse_ignored, save_figure, shaft_speed, write_outputs)
 
 #: A crank speed > 0 [rad/s], or with a unit (``600rpm``).
@@ -27,15 +27,14 @@ def register(sub) -> None:
         add(sub)
 
 
-def _register_fourbar(sub) -> None:
+@command("fourbar", "four-bar dead centres, swing, transmission angle and ε4T",
+         "Closed-form four-bar analysis: Grashof class, dead centres, swing Ψ, transmission angle "
+         "range and the theoretical rocker acceleration ε4T = ν·ω². Angles are measured "
+         "counter-clockwise from the frame line A→D; the crank turns with θ increasing.",
+         "Example: mechcirc fourbar --crank 29 --coupler 37 --rocker 188 --frame 189 --omega 100 "
+         "--plot fourbar.png")
+def _register_fourbar(p) -> None:
     """``fourbar``: the closed-form four-bar."""
-    p = add_command(
-        sub, "fourbar", "four-bar dead centres, swing, transmission angle and ε4T",
-        "Closed-form four-bar analysis: Grashof class, dead centres, swing Ψ, transmission angle "
-        "range and the theoretical rocker acceleration ε4T = ν·ω². Angles are measured "
-        "counter-clockwise from the frame line A→D; the crank turns with θ increasing.",
-        "Example: mechcirc fourbar --crank 29 --coupler 37 --rocker 188 --frame 189 --omega 100 "
-        "--plot fourbar.png")
     _add_lengths(p, "(any unit)")
     p.add_argument("--omega", type=real(most=MAX_OMEGA, unit="rad/s", role="omega"), metavar="W",
                    help="crank speed [rad/s; or with a unit: 955rpm] for ε4T = ν·ω²")
@@ -53,21 +52,20 @@ def _add_lengths(p, unit: str) -> None:
                        metavar="L", help=f"{name} length {what} {unit}")
 
 
-def _register_frame(sub) -> None:
+@command("frame", "four-bar frame loading: bearing forces, shaking force and moments (eq. 7)",
+         "Kineto-static analysis of a four-bar at constant crank speed (patent CN104178888 eq. 7): "
+         "bearing forces at the crankshaft A and the rocking shaft D, driving torque T, shaking "
+         "force S = −(F_A + F_D) on the frame and shaking moments T_a, T_d. Lengths and centres of "
+         "mass in --unit (default mm), masses in kg, inertias in kg·m² about the centre of mass, "
+         "forces in N. Link frames: crank x along A→B, coupler x along B→C, rocker x along D→C. "
+         "The reed force is a half sine over a window of crank angle around the front dead centre, "
+         "given in the rocker's frame.",
+         "Example: mechcirc frame --crank 35 --coupler 57.8 --rocker 155.6 --frame 162.75 --rpm "
+         "600 --mass 2,1.5,15 --rocker-com 110,30 --rocker-inertia 0.08 --reed-force=-50,-500 "
+         "--reed-point 140,50 --plot frame.png -o frame.csv\n"
+         "(write a value that starts with a minus with '=', as --reed-force=-50,-500)")
+def _register_frame(p) -> None:
     """``frame``: the four-bar's bearing forces and shaking (eq. 7)."""
-    p = add_command(
-        sub, "frame", "four-bar frame loading: bearing forces, shaking force and moments (eq. 7)",
-        "Kineto-static analysis of a four-bar at constant crank speed (patent CN104178888 eq. 7): "
-        "bearing forces at the crankshaft A and the rocking shaft D, driving torque T, shaking "
-        "force S = −(F_A + F_D) on the frame and shaking moments T_a, T_d. Lengths and centres of "
-        "mass in --unit (default mm), masses in kg, inertias in kg·m² about the centre of mass, "
-        "forces in N. Link frames: crank x along A→B, coupler x along B→C, rocker x along D→C. "
-        "The reed force is a half sine over a window of crank angle around the front dead centre, "
-        "given in the rocker's frame.",
-        "Example: mechcirc frame --crank 35 --coupler 57.8 --rocker 155.6 --frame 162.75 --rpm "
-        "600 --mass 2,1.5,15 --rocker-com 110,30 --rocker-inertia 0.08 --reed-force=-50,-500 "
-        "--reed-point 140,50 --plot frame.png -o frame.csv\n"
-        "(write a value that starts with a minus with '=', as --reed-force=-50,-500)")
     _add_lengths(p, "[--unit]")
     p.add_argument("--unit", choices=("mm", "m"), default="mm",
                    help="length unit of lengths, centres of mass and the reed point (default mm)")
@@ -104,15 +102,14 @@ def _register_frame(sub) -> None:
     add_handler(p, cmd_frame)
 
 
-def _register_synth(sub) -> None:
+@command("synth", "beat-up four-bar synthesis after patent CN104178888",
+         "Explore crank-rockers meeting every criterion of the patent (γ at the front dead centre "
+         "> 70°, γmin > 45°, |Φ2''|/|Φ1''| < 0.3, d < 180 mm, eq. (9), swing 23–26°) and rank "
+         "them. Lengths in mm.",
+         "Example: mechcirc synth --load medium --swing 24 --plot synth.png\n"
+         "         mechcirc synth --load medium --frame 165 --swing-range 24:26 --export designs/")
+def _register_synth(p) -> None:
     """``synth``: beat-up four-bar synthesis and export."""
-    p = add_command(
-        sub, "synth", "beat-up four-bar synthesis after patent CN104178888",
-        "Explore crank-rockers meeting every criterion of the patent (γ at the front dead centre "
-        "> 70°, γmin > 45°, |Φ2''|/|Φ1''| < 0.3, d < 180 mm, eq. (9), swing 23–26°) and rank "
-        "them. Lengths in mm.",
-        "Example: mechcirc synth --load medium --swing 24 --plot synth.png\n"
-        "         mechcirc synth --load medium --frame 165 --swing-range 24:26 --export designs/")
     p.add_argument("--load", choices=("light", "medium", "heavy"), default="medium",
                    help="loom class: crank 33–34, 35–36 or 37–38 mm (default medium)")
     p.add_argument("--swing", type=real(above=0.0, most=180.0, unit="deg", role="angle"), metavar="DEG",
@@ -174,15 +171,14 @@ def _register_synth_export(p) -> None:
                        f"Mrázek's one-side variant 1)")
 
 
-def _register_linkage(sub) -> None:
+@command("linkage", "positions, velocities and conditional-stop velocities of a TOML linkage",
+         "Solve a planar linkage (revolute joints and sliders) with any number of driving cranks "
+         "(TOML file, see docs/kinematics.md) at a rotation θ of the first crank from the file's "
+         "pose; velocities are also split into each crank's contribution with the others stopped.",
+         "Example: mechcirc linkage examples/fnf_sixbar.toml --theta 30 --plot fnf.png",
+         file="linkage file (.toml)")
+def _register_linkage(p) -> None:
     """``linkage``: a TOML linkage at one θ."""
-    p = add_command(
-        sub, "linkage", "positions, velocities and conditional-stop velocities of a TOML linkage",
-        "Solve a planar linkage (revolute joints and sliders) with any number of driving cranks "
-        "(TOML file, see docs/kinematics.md) at a rotation θ of the first crank from the file's "
-        "pose; velocities are also split into each crank's contribution with the others stopped.",
-        "Example: mechcirc linkage examples/fnf_sixbar.toml --theta 30 --plot fnf.png",
-        file="linkage file (.toml)")
     p.add_argument("--theta", type=crank_angle, default=0.0, metavar="DEG",
                    help="rotation of the first crank from the pose [deg] (default 0)")
     add_plot_option(p, "draw the linkage at θ with the paths of its points")

@@ -7,24 +7,23 @@ import math
 
 from ..errors import MechcircError
 from ..units import in_unit
-from ._common import (Default, add_command, add_handler, add_method_option, add_output_option,
-                      add_plot_option, add_unit_option, check_names, check_output_paths,
-                      count, crank_angle, load_with_warnings, print_json, print_written, real,
-                      refuse_ignored, scene_theta, shaft_speed, warning_lines, write_outputs)
+from ._common import (Default, add_handler, add_method_option, add_output_option, add_plot_option,
+                      add_unit_option, check_names, check_output_paths, command, count, crank_angle,
+                      load_with_warnings, print_json, print_written, real, refuse_ignored,
+                      scene_theta, shaft_speed, warning_lines, write_outputs)
 
 
-def register(sub) -> None:
-    p = add_command(
-        sub, "periodic", "drive force over one revolution at machine speed; speed map",
-        "Steady-state periodic force of a drive given by its motion over one revolution ('drive "
-        "... motion=lift.csv' or 'motion=cycloidal rise=... dwell=... return=... stroke=...'): "
-        "the harmonics kΩ of the drive's velocity through K(kΩ), as many as the error asked for "
-        "needs (said). With --rpm: Q(θ) over the crank angle and the harmonics near resonances. "
-        "With --rpm-min/--rpm-max: the peak |Q(θ)| against machine speed and the speeds where a "
-        "harmonic meets a resonance (k·Ω = ωn).",
-        "Examples:\n  mechcirc periodic docs/examples/cam_drive.mcir --rpm 600 -o Q.csv\n"
-        "  mechcirc periodic docs/examples/cam_drive.mcir --rpm-min 100 --rpm-max 1200\n"
-        "  mechcirc periodic docs/examples/rocker_drive.toml --theta 30 --rpm 300")
+@command("periodic", "drive force over one revolution at machine speed; speed map",
+         "Steady-state periodic force of a drive given by its motion over one revolution ('drive "
+         "... motion=lift.csv' or 'motion=cycloidal rise=... dwell=... return=... stroke=...'): "
+         "the harmonics kΩ of the drive's velocity through K(kΩ), as many as the error asked for "
+         "needs (said). With --rpm: Q(θ) over the crank angle and the harmonics near resonances. "
+         "With --rpm-min/--rpm-max: the peak |Q(θ)| against machine speed and the speeds where a "
+         "harmonic meets a resonance (k·Ω = ωn).",
+         "Examples:\n  mechcirc periodic docs/examples/cam_drive.mcir --rpm 600 -o Q.csv\n"
+         "  mechcirc periodic docs/examples/cam_drive.mcir --rpm-min 100 --rpm-max 1200\n"
+         "  mechcirc periodic docs/examples/rocker_drive.toml --theta 30 --rpm 300")
+def register(p) -> None:
     p.add_argument("file", help="netlist (.mcir) whose drive has motion=, or a scene (.toml): "
                                 "its circuit at --theta driven by the motion its linkage imposes")
     p.add_argument("--theta", type=crank_angle, metavar="DEG",

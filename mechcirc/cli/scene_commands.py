@@ -9,26 +9,20 @@ from ..errors import MechcircError
 from ..limits import MAX_CYCLE_POINTS
 from ..progress import Progress
 from ..units import FREQUENCY_UNITS, in_unit
-from ._common import (NETLIST_FILE, Default, add_command, add_handler, add_output_option,
-                      add_plot_option, add_unit_option, check_output_paths, count, crank_angle,
+from ._common import (NETLIST_FILE, Default, add_handler, add_output_option, add_plot_option,
+                      add_unit_option, check_output_paths, command, commands, count, crank_angle,
                       frequency_symbol, print_json, print_written, real, refuse_ignored,
                       save_figure, scene_theta, set_values, write_outputs, write_text)
 
 
-def register(sub) -> None:
-    for add in (_register_scene, _register_reduce):
-        add(sub)
-
-
-def _register_scene(sub) -> None:
-    p = add_command(
-        sub, "scene", "a scene (linkage + masses + elastic links) to its mechanical circuit",
-        "Linearise a scene file at a crank angle into a netlist (--theta),\n"
-        "or map its resonances and |Q0| at the shaft harmonics over one\n"
-        "revolution (--cycle).  See docs/scenes.md.",
-        "Examples:\n  mechcirc scene examples/heald_scene.toml --theta 40 -o heald.mcir\n"
-        "  mechcirc scene examples/heald_scene.toml --cycle --points 72 --harmonics 8 --plot "
-        "cycle.png", file="scene file (.toml)")
+@command("scene", "a scene (linkage + masses + elastic links) to its mechanical circuit",
+         "Linearise a scene file at a crank angle into a netlist (--theta),\n"
+         "or map its resonances and |Q0| at the shaft harmonics over one\n"
+         "revolution (--cycle).  See docs/scenes.md.",
+         "Examples:\n  mechcirc scene examples/heald_scene.toml --theta 40 -o heald.mcir\n"
+         "  mechcirc scene examples/heald_scene.toml --cycle --points 72 --harmonics 8 --plot "
+         "cycle.png", file="scene file (.toml)")
+def _register_scene(p) -> None:
     what = p.add_mutually_exclusive_group()
     what.add_argument("--theta", type=crank_angle, metavar="DEG",
                       help="crank rotation from the pose [deg] to linearise at (default: "
@@ -56,15 +50,14 @@ def _register_scene(sub) -> None:
     add_handler(p, cmd_scene)
 
 
-def _register_reduce(sub) -> None:
-    p = add_command(
-        sub, "reduce", "model only what the output needs in a frequency band",
-        "Remove or merge elements of a netlist that do not matter for the output in the band [W1, "
-        "W2] (rigid springs, negligible masses, chains that collapse); report the measured worst "
-        "relative error of the output over the band (never above --tol) and the shift of each "
-        "resonance.",
-        "Example: mechcirc reduce netlists/stb_heald.mcir --band 10:2000 --tol 0.01 -o "
-        "reduced.mcir", file=NETLIST_FILE, raw=False)
+@command("reduce", "model only what the output needs in a frequency band",
+         "Remove or merge elements of a netlist that do not matter for the output in the band [W1, "
+         "W2] (rigid springs, negligible masses, chains that collapse); report the measured worst "
+         "relative error of the output over the band (never above --tol) and the shift of each "
+         "resonance.",
+         "Example: mechcirc reduce netlists/stb_heald.mcir --band 10:2000 --tol 0.01 -o "
+         "reduced.mcir", file=NETLIST_FILE, raw=False)
+def _register_reduce(p) -> None:
     p.add_argument("--band", required=True, metavar="W1:W2",
                    help="angular frequency band [rad/s], W1 < W2")
     p.add_argument("--tol", type=real(above=0.0, most=1.0), required=True, metavar="T",
@@ -78,6 +71,9 @@ def _register_reduce(sub) -> None:
                    help="log-spaced check points over the band (default 2000; two more "
                         "beside each resonance in the band)")
     add_handler(p, cmd_reduce)
+
+
+register = commands(_register_scene, _register_reduce)
 
 
 def cmd_scene(args) -> int:

@@ -9,8 +9,8 @@ from ..limits import (MAX_POINTS_PER_REVOLUTION, MAX_REVOLUTIONS, MAX_SCIPY_REVO
                       METHODS, SCIPY_METHODS)
 from ..progress import Progress
 from ..units import FREQUENCY_UNITS, in_unit
-from ._common import (Default, add_command, add_handler, add_output_option, add_plot_option,
-                      add_unit_option, check_output_paths, count, crank_angle, positive_omega,
+from ._common import (Default, add_handler, add_output_option, add_plot_option, add_unit_option,
+                      check_output_paths, command, commands, count, crank_angle, positive_omega,
                       print_json, print_written, real, refuse_ignored, set_values, write_outputs,
                       write_text)
 
@@ -18,21 +18,15 @@ _UNITS = {"eps4T": "rad/s^2", "eps2P": "rad/s^2", "eps4P": "rad/s^2", "eps5P": "
           "M2V": "N m", "M5V": "N m"}
 
 
-def register(sub) -> None:
-    for add in (_register_simulate, _register_crosscheck):
-        add(sub)
-
-
-def _register_simulate(sub) -> None:
-    p = add_command(
-        sub, "simulate", "sley beat-up dynamics (Mrázek, Tables 1 and 2) in the time domain",
-        "Integrate the sley model (eq. 4 one-side, eq. 9 both-sides; the presets run as their "
-        "scenes, examples/mrazek_*.toml) from the crank angle of zero sley acceleration over R "
-        "revolutions and print the min/max of the last one beside the paper's printed values. The "
-        "beat-up interval alpha is not printed in the paper: default 10 deg, the best fit to the "
-        "printed cells (sigma = alpha).",
-        "Example: mechcirc simulate --drive one-side --variant 3 --plot sley.png\n"
-        "         mechcirc simulate --variant all --json")
+@command("simulate", "sley beat-up dynamics (Mrázek, Tables 1 and 2) in the time domain",
+         "Integrate the sley model (eq. 4 one-side, eq. 9 both-sides; the presets run as their "
+         "scenes, examples/mrazek_*.toml) from the crank angle of zero sley acceleration over R "
+         "revolutions and print the min/max of the last one beside the paper's printed values. The "
+         "beat-up interval alpha is not printed in the paper: default 10 deg, the best fit to the "
+         "printed cells (sigma = alpha).",
+         "Example: mechcirc simulate --drive one-side --variant 3 --plot sley.png\n"
+         "         mechcirc simulate --variant all --json")
+def _register_simulate(p) -> None:
     p.add_argument("scene", nargs="?", metavar="SCENE.toml",
                    help="simulate this scene file over whole revolutions (docs/scenes.md); "
                         "without it, the sley presets (--drive, --variant)")
@@ -93,19 +87,18 @@ def _sley_arguments(p) -> None:
     add_output_option(p, "write the curves as CSV")
 
 
-def _register_crosscheck(sub) -> None:
-    p = add_command(
-        sub, "crosscheck", "a netlist, scene or sley preset's circuit against its time domain",
-        "(a) resonances (K = 0) of the sley's netlist at crank angle theta against the "
-        "eigenfrequencies of the linearised equations; (b) ringing of the sley after the beat-up "
-        "pulse against the predicted damped frequency; (c) harmonic forcing of the netlist in "
-        "time (its periodic steady state) against |Q0| of its sweep.",
-        "Example: mechcirc crosscheck --drive one-side --variant 3 --theta 60\n"
-        "         mechcirc crosscheck examples/heald_scene.toml --theta 40\n"
-        "         mechcirc crosscheck netlists/stb_heald.mcir --omega-max 5000\n"
-        "(a scene .toml: circuit resonances at --theta against the ringing of its time-domain "
-        "motion, and |Q0| against the forced response to a drive-speed ripple; a netlist: see the "
-        "transient command)")
+@command("crosscheck", "a netlist, scene or sley preset's circuit against its time domain",
+         "(a) resonances (K = 0) of the sley's netlist at crank angle theta against the "
+         "eigenfrequencies of the linearised equations; (b) ringing of the sley after the beat-up "
+         "pulse against the predicted damped frequency; (c) harmonic forcing of the netlist in "
+         "time (its periodic steady state) against |Q0| of its sweep.",
+         "Example: mechcirc crosscheck --drive one-side --variant 3 --theta 60\n"
+         "         mechcirc crosscheck examples/heald_scene.toml --theta 40\n"
+         "         mechcirc crosscheck netlists/stb_heald.mcir --omega-max 5000\n"
+         "(a scene .toml: circuit resonances at --theta against the ringing of its time-domain "
+         "motion, and |Q0| against the forced response to a drive-speed ripple; a netlist: see the "
+         "transient command)")
+def _register_crosscheck(p) -> None:
     p.add_argument("file", nargs="?", metavar="FILE",
                    help="a scene (.toml): cross-check it at --theta; a netlist (.mcir): "
                         "cross-check its resonances and |Q0| against its transients")
@@ -125,6 +118,9 @@ def _register_crosscheck(sub) -> None:
     add_unit_option(p, "show frequencies in rad/s (omega, the default), Hz (f = omega/2 pi) "
                        "or rpm (n = 60 omega/2 pi); --json stays in rad/s")
     add_handler(p, cmd_crosscheck)
+
+
+register = commands(_register_simulate, _register_crosscheck)
 
 
 # ------------------------------------------------------------------ helpers

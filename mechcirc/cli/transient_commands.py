@@ -6,34 +6,32 @@ import math
 import sys
 
 from ..units import in_unit
-from ._common import (Default, add_command, add_handler, add_output_option, add_plot_option,
-                      check_names, check_output_paths, frequency_symbol, print_json,
-                      print_written, real, refuse_ignored, shaft_speed, write_outputs)
+from ._common import (Default, add_handler, add_output_option, add_plot_option, check_names,
+                      check_output_paths, command, frequency_symbol, print_json, print_written,
+                      real, refuse_ignored, shaft_speed, write_outputs)
 
 seconds = real(above=0.0, unit="s", role="time")
 
 
-def register(sub) -> None:
-    p = add_command(
-        sub, "transient", "time response of a netlist (exact for linear circuits; backlash)",
-        "Integrate a netlist from its .ic state: node displacements and velocities, every "
-        "element's force and the drive's force (velocity drive) or velocity (force drive) on the "
-        "grid 0, dt, ..., t_end. Linear circuits are propagated exactly between drive samples "
-        "(matrix exponential); springs with backlash= use the Modelica ElastoBacklash law and an "
-        "adaptive Dormand-Prince 5(4) integrator.",
-        "Examples:\n"
-        "  mechcirc transient examples/msl_backlash.mcir --t-end 1 --dt 1e-3 -o msl.csv\n"
-        "  mechcirc transient netlists/stb_heald.mcir --t-end 0.05 --waveform harmonic:300 --json",
-        file="netlist (.mcir); a drive line is optional")
+@command("transient", "time response of a netlist (exact for linear circuits; backlash)",
+         "Integrate a netlist from its .ic state: node displacements and velocities, every "
+         "element's force and the drive's force (velocity drive) or velocity (force drive) on the "
+         "grid 0, dt, ..., t_end. Linear circuits are propagated exactly between drive samples "
+         "(matrix exponential); springs with backlash= use the Modelica ElastoBacklash law and an "
+         "adaptive Dormand-Prince 5(4) integrator.",
+         "Examples:\n"
+         "  mechcirc transient examples/msl_backlash.mcir --t-end 1 --dt 1e-3 -o msl.csv\n"
+         "  mechcirc transient netlists/stb_heald.mcir --t-end 0.05 --waveform harmonic:300 --json",
+         file="netlist (.mcir); a drive line is optional")
+def register(p) -> None:
     p.add_argument("--t-end", type=seconds, required=True, metavar="T",
                    help="end time [s]; or with a unit: 50ms")
     p.add_argument("--dt", type=seconds, metavar="DT",
-                   help="output step [s] (default t_end/2000; 40 per period of a harmonic "
-                        "drive)")
+                   help="output step [s] (default t_end/2000; 40 per period of a harmonic drive)")
     p.add_argument("--waveform", metavar="WAVE",
-                   help="the drive's waveform in time: harmonic:OMEGA (rad/s, or with a unit: 50Hz), step, impulse, "
-                        "csv:PATH (time,value samples, interpolated linearly) or rest "
-                        "(default: the drive stays at rest)")
+                   help="the drive's waveform in time: harmonic:OMEGA (rad/s, or with a unit: "
+                        "50Hz), step, impulse, csv:PATH (time,value samples, interpolated "
+                        "linearly) or rest (default: the drive stays at rest)")
     p.add_argument("--rpm", type=shaft_speed, metavar="RPM",
                    help="shaft speed [rev/min] of a drive given by its motion over a "
                         "revolution (drive ... motion=LAW or motion=TABLE.csv); required "

@@ -432,8 +432,7 @@ from ..units import in_si  # noqa: E402
 #: The tables of a linkage file, declared once (see :class:`mechcirc.sources.Table`);
 #: ``[points]`` and ``[links]`` map names of the user's choice.
 TABLES = {
-    None: Table(None, {"cranks": "[[cranks]]: the driving cranks",
-                       "description": "free text",
+    None: Table(None, {"cranks": "[[cranks]]: the driving cranks", "description": "free text",
                        "sliders": "[[sliders]]: prismatic pairs",
                        "ground": "[ground]: points = [ground pivots]",
                        "links": "[links]: NAME = [two or more points]",
@@ -701,17 +700,22 @@ def _read_units(doc: dict, text: str, source: str) -> str:
 
 
 def load_linkage(path: str | Path) -> Linkage:
-    """Read and parse a linkage TOML file (see :func:`parse_linkage`).
+    """Read a linkage TOML file: :func:`parse_linkage` of its text, its errors naming the file.
 
     Parameters
     ----------
     path : str or Path
-        The linkage file (TOML, UTF-8).
+        The linkage file: TOML in UTF-8, its lengths in its ``units``.
 
     Returns
     -------
     Linkage
-        As :func:`parse_linkage`, with the file's name in its error messages.
+
+    Raises
+    ------
+    NetlistError
+        The file is missing or unreadable, or has an error (at file:line:col).
+    GeometryError
+        As :func:`parse_linkage`.
     """
-    text = read_source(path, "a linkage .toml")
-    return parse_linkage(text, os.fspath(path))
+    return parse_linkage(read_source(path, "a linkage .toml"), os.fspath(path))

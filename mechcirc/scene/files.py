@@ -203,7 +203,7 @@ class Load:
     stiffness: float
     damping: float
     anchor: str | None = None
-    direction: tuple | None = None
+    direction: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)

@@ -121,16 +121,19 @@ def all_presets(**overrides) -> list[SleyParameters]:
 #: The paper's printed results: PAPER[drive][variant][quantity] = (min, max).
 #: Units: accelerations [rad/s²], moments [N·m].  Lost minus signs restored as
 #: described in the module docstring (M2V of Table 1 variant 6 read as −279 / 101).
+#: Table 1's ε4T, the rigid four-bar's (ν ω²), depends on the variant's ω only
+#: (``_EPS4T``), so its rows give the other quantities.
+_EPS4T = {100.0: (-2319, 2915), 40.0: (-371, 466)}
 PAPER = {
-    "one-side": {
-        1: {"eps4T": (-2319, 2915), "eps2P": (-1666, 938), "eps4P": (-2756, 5686), "M2V": (-194, 193)},
-        2: {"eps4T": (-2319, 2915), "eps2P": (-32388, 54960), "eps4P": (-2848, 6975), "M2V": (-426, 272)},
-        3: {"eps4T": (-2319, 2915), "eps2P": (-11837, 13954), "eps4P": (-2754, 7039), "M2V": (-182, 196)},
-        4: {"eps4T": (-2319, 2915), "eps2P": (-13602, 15413), "eps4P": (-2767, 6472), "M2V": (-266, 232)},
-        5: {"eps4T": (-2319, 2915), "eps2P": (-13586, 15398), "eps4P": (-2814, 6033), "M2V": (-271, 232)},
-        6: {"eps4T": (-2319, 2915), "eps2P": (-8501, 7945), "eps4P": (-5277, 4443), "M2V": (-279, 101)},
-        7: {"eps4T": (-371, 466), "eps2P": (-3563, 5696), "eps4P": (-598, 1760), "M2V": (-52, 50)},
-    },
+    "one-side": {v: {"eps4T": _EPS4T[_OMEGA[v]], **row} for v, row in {
+        1: {"eps2P": (-1666, 938), "eps4P": (-2756, 5686), "M2V": (-194, 193)},
+        2: {"eps2P": (-32388, 54960), "eps4P": (-2848, 6975), "M2V": (-426, 272)},
+        3: {"eps2P": (-11837, 13954), "eps4P": (-2754, 7039), "M2V": (-182, 196)},
+        4: {"eps2P": (-13602, 15413), "eps4P": (-2767, 6472), "M2V": (-266, 232)},
+        5: {"eps2P": (-13586, 15398), "eps4P": (-2814, 6033), "M2V": (-271, 232)},
+        6: {"eps2P": (-8501, 7945), "eps4P": (-5277, 4443), "M2V": (-279, 101)},
+        7: {"eps2P": (-3563, 5696), "eps4P": (-598, 1760), "M2V": (-52, 50)},
+    }.items()},
     "both-sides": {
         1: {"eps2P": (-1292, 923), "eps4P": (-2639, 4434), "eps5P": (-2415, 1885), "M2V": (-201, 250)},
         2: {"eps2P": (-21656, 24770), "eps4P": (-4664, 6822), "eps5P": (-11493, 8034), "M2V": (-274, 273)},
