@@ -729,17 +729,15 @@ def _steady_cycle(scene, eq, req, motor, th0, rtol, scale, mean_load, peak, note
     guess, th = _balance(motor, mean_load, scale), th0 + np.linspace(0.0, cyc, 2048, False)
     if spp is not None:
         req.tableau = eq.tableau
-        req.steps = _stable(req, cyc, th, 0.5 * guess, max(int(math.ceil(RIGID_STEPS * spp)), 64))
+        req.steps = _stable(req, cyc, th, 0.5 * guess, RIGID_STEPS * spp)
     w0 = _steady_speed(req, th0, cyc,
                        max(rtol, 1e-5) if eq.n else rtol, scale,     # elastic: a first guess
                        guess, fail, 1e-5 if eq.n else 1e-13)
     x0 = np.array([w0])
     if eq.n and spp is not None:
-        eq.steps = _stable(eq, cyc, th, w0, max(int(math.ceil(
-            cyc * max_rate(eq.model) * spp / (2 * math.pi * w0))), 64))
+        eq.steps = _stable(eq, cyc, th, w0, cyc * max_rate(eq.model) * spp / (2 * math.pi * w0))
     if spp is not None and not eq.steps:
-        notes.append(f"DOP853 in θ: the shaft's speed relaxes too fast for fixed steps (more "
-                     f"than {MAX_STEPS} a cycle; a small flywheel)")
+        notes.append(f"DOP853 in θ: fixed steps would need over {MAX_STEPS} a cycle (small flywheel)")
     if eq.n and eq.steps:
         backend = "compiled" if getattr(eq.run_kern, "HAVE_NUMBA", False) else "Python copy"
         name = "RK8" if eq.tableau[3] else "RK4"
@@ -757,8 +755,9 @@ def _steady_cycle(scene, eq, req, motor, th0, rtol, scale, mean_load, peak, note
 
 
 def _stable(eq, cyc, th, w, steps):
-    """``steps`` a cycle of the fixed-step method, or more, so that each step's h·λ stays
-    within half its real-axis stability limit (RK4 2.785, RK8 6.39): λ = |∂(θ̈/θ̇)/∂θ̇|, the
+    """``steps`` a cycle of the fixed-step method (at least 64), or more, so that each
+    step's h·λ stays within half its real-axis stability limit (RK4 2.785, RK8 6.39):
+    λ = |∂(θ̈/θ̇)/∂θ̇|, the
     relaxation of the shaft's speed in θ, at crank rotations ``th`` and speed ``w`` (fast
     where a small flywheel leaves little inertia against the motor's slope); 0 (DOP853,
     adaptive) beyond :data:`MAX_STEPS`."""
@@ -767,7 +766,7 @@ def _stable(eq, cyc, th, w, steps):
         a = [eq.evaluate(th, v, z)[:, -5] / v for v in (w, w * (1 + 1e-6))]
         n = cyc * float(np.max(np.abs(a[1] - a[0]))) / (1e-6 * w) / (
             3.2 if eq.tableau[3] else 1.39)
-    return max(steps, int(math.ceil(n))) if n <= MAX_STEPS else 0
+    return max(64, math.ceil(steps), math.ceil(n)) if n <= MAX_STEPS else 0
 
 
 def _tabulate(scene, eq, sol, th0, cyc, points):
