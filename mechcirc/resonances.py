@@ -1604,7 +1604,7 @@ def _stacked_damped(M: np.ndarray, Dm: np.ndarray, K: np.ndarray, omega_max):
     # M⁻¹ = L⁻ᵀ L⁻¹ by Cholesky where M is safely definite (``definite``).
     definite = ok.copy()
     _, Linv = _stacked_cholesky_inverse(Ms, definite)
-    sig = np.linalg.eigvals(_companion(Linv, Ds, Ks, ok))   # s / w_ref
+    sig = np.linalg.eigvals(_companion(Linv, Ds, Ks, ok)).astype(complex)   # s / w_ref
     finite = np.ones(sig.shape, dtype=bool)
     shifted = np.flatnonzero(ok & ~definite)
     if shifted.size:

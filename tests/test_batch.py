@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 from pathlib import Path
 
 import mpmath
@@ -945,3 +946,19 @@ def test_a_pair_that_k_says_cancels_is_left_to_the_single_path():
         assert [(r.kind, r.omega, r.error) for r in res.list(d)] == \
             [(r.kind, r.omega, r.error) for r in one]
         assert len(one) == 2 and max(r.omega for r in one) < 4
+
+
+def test_stacked_damped_roots_stay_complex_where_the_companions_roots_are_all_real():
+    """The stacked eigvals of the companion matrices is a real array when every root of the
+    stack is real (springs of 1e-300 N/m: every root slow and real); the reversed problem's
+    roots written into it lost their imaginary parts (a ComplexWarning escaped to the user,
+    from resonances.py).  Now complex from the start: no warning, the single path's roots."""
+    text = (".param k=1e5\ndrive V a 0 velocity=1\nspring k1 a b k\nmass m1 b 0 1\n"
+            "spring k2 b c {2*k}\ndamper c2 b c 20\nmass m2 c 0 2\nspring k3 c d k\n"
+            "mass m3 d 0 1.5\ndamper c3 d 0 10\n")
+    for k in (1e-300, 1e-200, 1e-40):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            got = designs(text, {"k": [k]}).resonances().list(0)
+        ref = find_resonances(one(text, {"k": np.array([k])}, 0))
+        assert [(r.kind, r.omega, r.zeta) for r in got] == [(r.kind, r.omega, r.zeta) for r in ref]

@@ -205,6 +205,14 @@ def test_resonance_tables():
     ({"grid": {"eta1": []}}, "empty list"),
     ({"grid": {"eta1": [1.0]}, "colour": 1}, "unknown top-level key 'colour' (expected analysis,"),
     ({"grid": {"eta1": [1.0]}, "analysis": "fft"}, "analysis must be"),
+    # one frequency made the band [min, min]: its "extremes" were K at min (exit 0)
+    ({"grid": {"eta1": [1.0]}, "omega": {"min": 5, "max": 2000, "points": 1}},
+     "omega.points must be an integer from 2"),
+    # each point then failed alone, the study exiting 0
+    ({"grid": {"eta1": [1.0]}, "analysis": "resonances", "omega_max": -5},
+     "omega_max must be > 0 rad/s, got -5"),
+    ({"grid": {"eta1": [1.0]}, "analysis": "resonances", "omega_max": "0 Hz"},
+     "omega_max must be > 0 rad/s, got 0"),
 ])
 def test_bad_specs_name_the_key(data, fragment):
     with pytest.raises(MechcircError, match=fragment.replace("(", r"\(").replace(")", r"\)")):

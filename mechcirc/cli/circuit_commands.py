@@ -553,6 +553,6 @@ def _print_sensitivity(m, kinds, shown: int = 10) -> None:
     print(f"  {'name':<{w}} {'kind':<7} {'(p/omega) d(omega)/dp':>22} {'p d(zeta)/dp':>13}")
     zeta = m.zeta_sensitivity | m.param_zeta_sensitivity
     for name, kind, x in ranked[:shown]:
-        print(f"  {name:<{w}} {kind:<7} {x:>+22.4g} {zeta[name]:>+13.3g}")
+        print(f"  {name:<{w}} {kind:<7} {x + 0.0:>+22.4g} {zeta[name] + 0.0:>+13.3g}")
     if len(ranked) > shown:
         print(f"  ... and {len(ranked) - shown} smaller (--json gives every one)")

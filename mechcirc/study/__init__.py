@@ -60,9 +60,10 @@ the band (:meth:`mechcirc.batch.Designs.extremes`), not grid samples — ``0``
 or ``inf`` with the ω of the first zero or pole of K when the band holds an
 undamped one — and the number of flagged grid points; for resonances
 ``resonance_1..N`` and ``antiresonance_1..N`` [rad/s]
-(empty where there are fewer), for a sley simulation the minimum and maximum
-over the tabulated revolution of ``eps2P eps4P eps4T`` [rad/s²] and ``M2V``
-[N·m] (both-sides drive: also ``eps5P M5V``), e.g. ``eps4P_min``.
+(NaN where there are fewer; an error row leaves every result empty), for a
+sley simulation the minimum and maximum over the tabulated revolution of
+``eps2P eps4P eps4T`` [rad/s²] and ``M2V`` [N·m] (both-sides drive: also
+``eps5P M5V``), e.g. ``eps4P_min``.
 
 Execution: all local cores (``concurrent.futures.ProcessPoolExecutor``) by
 default, or an existing Dask cluster (``scheduler="tcp://host:8786"``;

@@ -293,6 +293,8 @@ def _parse_spec(data: dict, source: str, base: Path) -> StudySpec:
     n_res = _integer(("resonances",), data.get("resonances", 3), "resonances", 1, 100)
     omega_max = _omega(("omega_max",), data["omega_max"], "omega_max") \
         if "omega_max" in data else None
+    if omega_max is not None and not omega_max > 0:
+        _fail(("omega_max",), f"omega_max must be > 0 rad/s, got {omega_max:g}")
     sley: tuple[str, int, int, int] | None = None
     if analysis == "simulate":
         sley = _sley_settings(data.get("sley", {}), names, kind)
@@ -566,7 +568,7 @@ def _sweep_omega(o, n_points: int) -> tuple[float, float, int, bool]:
                           "(and points, log)")
     _check_keys("omega", o)
     lo, hi = (_omega(("omega", end), o[end], f"omega.{end}") for end in ("min", "max"))
-    npts = _integer(("omega", "points"), o.get("points", 200), "omega.points", 1,
+    npts = _integer(("omega", "points"), o.get("points", 200), "omega.points", 2,
                     MAX_STUDY_SWEEP_POINTS)
     log = bool(o.get("log", False))
     if not (0 <= lo < hi) or (log and lo <= 0):
