@@ -1043,6 +1043,11 @@ def _make(kind: Kind, s: complex, err: float) -> Resonance:
 #: Roots whose eigen-solver bound is below this are not polished on K (undamped).
 POLISH_BELOW = 1e-13
 
+#: The largest error a damped root of a series–parallel design may keep from Newton on the
+#: stacked float64 matrices (:func:`batched_roots`); a design with a larger one is solved by
+#: :func:`find_resonances` (7.6e-12 at most on ``heald_damped.mcir``'s massless direction).
+MAX_STACKED_ERROR = 1e-11
+
 
 def _spacing(s: np.ndarray, other: np.ndarray) -> np.ndarray:
     """Each root of ``s``'s distance to the nearest of ``other`` (inf where none).
@@ -1300,8 +1305,10 @@ def batched_roots(ds, omega_max: float | None = None):
     if not keep.size:
         return None
     pole, s, err = sorted_roots(*held_and_released(w_h[keep], w_r[keep], e_h[keep], e_r[keep]))
-    if damped:                        # already polished (on the matrices)
-        return which[keep], pole, s, err
+    if damped:      # polished on the matrices: a root they leave over MAX_STACKED_ERROR (a
+        # slow overdamped one, κ·eps 3.6e-4: 1e-5 off) goes to find_resonances (on K)
+        fine = ~(err > MAX_STACKED_ERROR).any(axis=1)
+        return which[keep][fine], pole[fine], s[fine], err[fine]
     # Undamped: polished on each design's K (the plan is there: the tree is, above).
     w, err = _secant_designs(ds.plan(which[keep]), s, pole, err)
     if omega_max is not None:
