@@ -560,9 +560,8 @@ class FourBar:
             bcd = math.acos(max(-1.0, min(1.0, (b * b + c * c - bd * bd) / (2 * b * c))))
             return float(np.arctan2(np.abs(np.sin(bcd)), np.abs(np.cos(bcd))))
 
-        g_lo, g_hi = gamma_at(bd_lo), gamma_at(bd_hi)
-        candidates = [(g_lo, thetas_for(bd_lo)), (g_hi, thetas_for(bd_hi))]
-        gmin = min(g_lo, g_hi)
+        candidates = [(gamma_at(bd), thetas_for(bd)) for bd in (bd_lo, bd_hi)]
+        gmin = min(g for g, _ in candidates)
         tmin = tuple(sorted(set().union(*(t for g, t in candidates
                                            if math.isclose(g, gmin, abs_tol=1e-15)))))
         right = math.sqrt(b * b + c * c)
