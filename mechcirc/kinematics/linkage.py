@@ -273,10 +273,8 @@ class Linkage(Memos):
                 raise GeometryError(f"{self.source}: links {', '.join(remaining)} form no Assur "
                                     f"group on the ground and cranks")
             combo, inner, ext = found
-            cls, base = 0, None
-            if len(combo) == 2:
-                cls = 2
-            elif len(combo) == 4:
+            cls, base = (2 if len(combo) == 2 else 0), None
+            if len(combo) == 4:
                 degree = {l: sum(1 for p in inner + ext if l in joints[p]) for l in combo}
                 ternary = [l for l in combo if degree[l] == 3]
                 if (len(ternary) == 1 and len(ext) == 3
