@@ -270,11 +270,9 @@ class FourBar:
         return "triple-rocker" if self.grashof_class == "non-Grashof" else self._shortest_type()
 
     def _shortest_type(self) -> LinkageType:
-        lengths = {"crank": self.crank, "frame": self.frame,
-                   "coupler": self.coupler, "rocker": self.rocker}
-        shortest = min(lengths, key=lengths.__getitem__)
-        return cast(LinkageType, {"crank": "crank-rocker", "frame": "double-crank",
-                                  "coupler": "double-rocker", "rocker": "rocker-crank"}[shortest])
+        by_shortest = ((self.crank, "crank-rocker"), (self.frame, "double-crank"),
+                       (self.coupler, "double-rocker"), (self.rocker, "rocker-crank"))
+        return cast(LinkageType, min(by_shortest, key=lambda x: x[0])[1])    # first of a tie
 
     def _crossings_note(self, crossings) -> str:
         """The summary's note on a change-point linkage's branch crossings."""
@@ -647,9 +645,8 @@ class FourBar:
             "crank": self.crank, "coupler": self.coupler, "rocker": self.rocker,
             "frame": self.frame, "branch": self.branch,
             "grashof_class": self.grashof_class, "linkage_type": self.linkage_type,
-        }
-        doc["crank_rotates_fully"] = self.crank_rotates_fully
-        doc["crank_range_deg"] = [math.degrees(t) for t in self.crank_range()]
+            "crank_rotates_fully": self.crank_rotates_fully,
+            "crank_range_deg": [math.degrees(t) for t in self.crank_range()]}
         tr = self.transmission_range()
         doc["gamma_min_deg"] = math.degrees(tr.gamma_min)
         doc["theta_at_gamma_min_deg"] = [math.degrees(t) for t in tr.theta_at_min]
