@@ -159,15 +159,14 @@ class Design:
 
     def as_dict(self) -> dict:
         """Plain data: lengths [mm] and every criterion's value, limit, pass and margin."""
-        out = {"a": self.a, "b": self.b, "c": self.c, "d": self.d,
-               "swing_deg": self.swing_deg, "mu1_deg": self.mu1_deg, "mu2_deg": self.mu2_deg,
-               "phi1_dd": self.phi1_dd, "phi2_dd": self.phi2_dd,
-               "feasible": self.feasible, "binding": list(self.binding),
-               "objective": self.objective, "grid_objective": self.grid_objective,
-               "shape": {"b_a": self.b / self.a, "c_a": self.c / self.a, "d_a": self.d / self.a}}
-        out["criteria"] = {n: {"value": c.value, "limit": c.limit, "passed": c.passed,
-                               "margin": c.margin} for n, c in self.criteria.items()}
-        return out
+        return {"a": self.a, "b": self.b, "c": self.c, "d": self.d,
+                "swing_deg": self.swing_deg, "mu1_deg": self.mu1_deg, "mu2_deg": self.mu2_deg,
+                "phi1_dd": self.phi1_dd, "phi2_dd": self.phi2_dd,
+                "feasible": self.feasible, "binding": list(self.binding),
+                "objective": self.objective, "grid_objective": self.grid_objective,
+                "shape": {"b_a": self.b / self.a, "c_a": self.c / self.a, "d_a": self.d / self.a},
+                "criteria": {n: {"value": c.value, "limit": c.limit, "passed": c.passed,
+                                 "margin": c.margin} for n, c in self.criteria.items()}}
 
 
 @dataclass(frozen=True)
