@@ -522,8 +522,7 @@ class _SceneReader:
                                "pivot" if "pivot" in t else "link", occurrence=n,
                                expected="pivot = one of the link's ground pivots")
             body = t.get("body")
-            if not is_name(body) or body in links \
-                    or body == "ground":
+            if not is_name(body) or body in links or body == "ground":
                 raise self.err(f"torsion rod #{n + 1}: body {body!r} must be a new name "
                                "(not a link or 'ground'; several rods may share one body)",
                                "torsion", "body" if "body" in t else "link", occurrence=n,
