@@ -283,9 +283,7 @@ def _eq10_roots_squared(psi, b_a, other):
     C = k1 * k1 + k2 * k2 - 2 * cp * k1 * k2
     with np.errstate(invalid="ignore"):
         sq = np.sqrt(B * B - 4 * A * C)
-        u1 = (-B + sq) / (2 * A)
-        u2 = (-B - sq) / (2 * A)
-    return tuple(np.where(u > 0, u, np.nan) for u in (u1, u2))
+        return tuple(np.where(u > 0, u, np.nan) for u in ((-B + sq) / (2 * A), (-B - sq) / (2 * A)))
 
 
 def solve_eq10(swing: float, b_a: float, *, c_a: float | None = None,
