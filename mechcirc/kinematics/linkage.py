@@ -380,9 +380,8 @@ class Linkage(Memos):
         GeometryError, NetlistError
             As :meth:`motion`, which this wraps.
         """
-        scalar = np.ndim(theta) == 0
         out = self.motion(theta, max_step_deg=max_step_deg, method=method).states()
-        return out[0] if scalar else out
+        return out[0] if np.ndim(theta) == 0 else out
 
     def assemble(self, crank_angles: dict, near: NDArray | None = None) -> dict:
         """Point positions with each crank turned by ``crank_angles[link]`` [rad] from the pose.
@@ -409,9 +408,8 @@ class Linkage(Memos):
                              f"one for each of {', '.join(map(repr, links))} [rad]")
         q = self.q0() if near is None else np.array(near, dtype=float)
         angles = real_values([crank_angles[k] for k in links], "crank_angles", "rad")[None]
-        q, ok = Newton(self._plan).newton(q[None], angles)
-        q = q[0]
-        if not ok[0]:
+        (q,), (ok,) = Newton(self._plan).newton(q[None], angles)
+        if not ok:
             raise GeometryError(f"{self.source}: no assembly for crank angles {crank_angles} "
                                 "near the given coordinates (the links cannot close there); "
                                 "give angles the linkage reaches, or near= closer to one")
