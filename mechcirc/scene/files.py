@@ -667,8 +667,7 @@ class _SceneReader:
 
     def mass(self, m, n, name) -> float:
         """``mass`` [kg] or ``inertia`` [kg·m²] of [[masses]] entry ``n`` named ``name``."""
-        key = "mass" if "mass" in m else "inertia"
-        unit = "kg" if key == "mass" else "kg·m²"
+        key, unit = ("mass", "kg") if "mass" in m else ("inertia", "kg·m²")
         return self.number(m[key], f"{key} {name!r} [{unit}]", "masses", key, n)
 
     def loads(self) -> list:
