@@ -542,11 +542,9 @@ class _Parser:
                 line.error(f"parameter {name!r} is defined twice "
                            f"(first on line {self.param_lines[name]})", tok.col)
             value_tok, unit_tok = _glued(_Token(rhs, tok.col + len(name) + 1))
-            self.params[name] = self.expr(line, value_tok, ("param", name))
+            self.params[name] = self.with_unit(line, self.expr(line, value_tok, ("param", name)),
+                                               unit_tok, "param", ("param", name))
             previous = name if unit_tok is None else None       # a unit may follow
-            if unit_tok is not None:
-                self.params[name] = self.with_unit(line, self.params[name], unit_tok, "param",
-                                                   ("param", name))
             if name in self.overrides:
                 given = self.overrides[name]
                 try:

@@ -367,15 +367,8 @@ def _in_view(locator):
             slack = 1e-10 * (hi - lo)
             return [t for t in self.base() if lo - slack <= t <= hi + slack]
 
-        def tick_values(self, vmin, vmax):
-            return self.base.tick_values(vmin, vmax)
-
-        def nonsingular(self, v0, v1):
-            return self.base.nonsingular(v0, v1)
-
-        def view_limits(self, vmin, vmax):
-            return self.base.view_limits(vmin, vmax)
-
+    for name in ("tick_values", "nonsingular", "view_limits"):      # the base's own
+        setattr(InView, name, lambda self, v0, v1, name=name: getattr(self.base, name)(v0, v1))
     return locator if type(locator).__name__ == "InView" else InView(locator)
 
 

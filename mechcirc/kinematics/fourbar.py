@@ -270,11 +270,9 @@ class FourBar:
         return "triple-rocker" if self.grashof_class == "non-Grashof" else self._shortest_type()
 
     def _shortest_type(self) -> LinkageType:
-        lengths = {"crank": self.crank, "frame": self.frame,
-                   "coupler": self.coupler, "rocker": self.rocker}
-        shortest = min(lengths, key=lengths.__getitem__)
-        return cast(LinkageType, {"crank": "crank-rocker", "frame": "double-crank",
-                                  "coupler": "double-rocker", "rocker": "rocker-crank"}[shortest])
+        by_shortest = ((self.crank, "crank-rocker"), (self.frame, "double-crank"),
+                       (self.coupler, "double-rocker"), (self.rocker, "rocker-crank"))
+        return cast(LinkageType, min(by_shortest, key=lambda x: x[0])[1])    # first of a tie
 
     def _crossings_note(self, crossings) -> str:
         """The summary's note on a change-point linkage's branch crossings."""
@@ -560,9 +558,8 @@ class FourBar:
             bcd = math.acos(max(-1.0, min(1.0, (b * b + c * c - bd * bd) / (2 * b * c))))
             return float(np.arctan2(np.abs(np.sin(bcd)), np.abs(np.cos(bcd))))
 
-        g_lo, g_hi = gamma_at(bd_lo), gamma_at(bd_hi)
-        candidates = [(g_lo, thetas_for(bd_lo)), (g_hi, thetas_for(bd_hi))]
-        gmin = min(g_lo, g_hi)
+        candidates = [(gamma_at(bd), thetas_for(bd)) for bd in (bd_lo, bd_hi)]
+        gmin = min(g for g, _ in candidates)
         tmin = tuple(sorted(set().union(*(t for g, t in candidates
                                            if math.isclose(g, gmin, abs_tol=1e-15)))))
         right = math.sqrt(b * b + c * c)
@@ -648,9 +645,8 @@ class FourBar:
             "crank": self.crank, "coupler": self.coupler, "rocker": self.rocker,
             "frame": self.frame, "branch": self.branch,
             "grashof_class": self.grashof_class, "linkage_type": self.linkage_type,
-        }
-        doc["crank_rotates_fully"] = self.crank_rotates_fully
-        doc["crank_range_deg"] = [math.degrees(t) for t in self.crank_range()]
+            "crank_rotates_fully": self.crank_rotates_fully,
+            "crank_range_deg": [math.degrees(t) for t in self.crank_range()]}
         tr = self.transmission_range()
         doc["gamma_min_deg"] = math.degrees(tr.gamma_min)
         doc["theta_at_gamma_min_deg"] = [math.degrees(t) for t in tr.theta_at_min]

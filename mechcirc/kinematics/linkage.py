@@ -273,10 +273,8 @@ class Linkage(Memos):
                 raise GeometryError(f"{self.source}: links {', '.join(remaining)} form no Assur "
                                     f"group on the ground and cranks")
             combo, inner, ext = found
-            cls, base = 0, None
-            if len(combo) == 2:
-                cls = 2
-            elif len(combo) == 4:
+            cls, base = (2 if len(combo) == 2 else 0), None
+            if len(combo) == 4:
                 degree = {l: sum(1 for p in inner + ext if l in joints[p]) for l in combo}
                 ternary = [l for l in combo if degree[l] == 3]
                 if (len(ternary) == 1 and len(ext) == 3
@@ -382,9 +380,8 @@ class Linkage(Memos):
         GeometryError, NetlistError
             As :meth:`motion`, which this wraps.
         """
-        scalar = np.ndim(theta) == 0
         out = self.motion(theta, max_step_deg=max_step_deg, method=method).states()
-        return out[0] if scalar else out
+        return out[0] if np.ndim(theta) == 0 else out
 
     def assemble(self, crank_angles: dict, near: NDArray | None = None) -> dict:
         """Point positions with each crank turned by ``crank_angles[link]`` [rad] from the pose.
@@ -411,9 +408,8 @@ class Linkage(Memos):
                              f"one for each of {', '.join(map(repr, links))} [rad]")
         q = self.q0() if near is None else np.array(near, dtype=float)
         angles = real_values([crank_angles[k] for k in links], "crank_angles", "rad")[None]
-        q, ok = Newton(self._plan).newton(q[None], angles)
-        q = q[0]
-        if not ok[0]:
+        (q,), (ok,) = Newton(self._plan).newton(q[None], angles)
+        if not ok:
             raise GeometryError(f"{self.source}: no assembly for crank angles {crank_angles} "
                                 "near the given coordinates (the links cannot close there); "
                                 "give angles the linkage reaches, or near= closer to one")

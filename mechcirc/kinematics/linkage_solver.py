@@ -727,13 +727,10 @@ def _newton_segments(lk, pl, pts, dt_max, zones):
     the other) it steps from the Taylor predictor, where det J changes sign."""
     ends = {z for z in zones} | {z[::-1] for z in zones}
     cuts = [i + 1 for i in range(len(pts) - 1) if (pts[i], pts[i + 1]) in ends]
-    out = [np.empty((len(pts),) + shape) for shape in
-           ((3 * pl.nb,),) * 3 + ((3 * pl.nb, len(pl.crank_idx)),)]
-    lo, start = 0, None
+    lo, start, pieces = 0, None, []
     for hi in cuts + [len(pts)]:
         got = _solve_newton(lk, pl, pts[lo:hi], dt_max, start)
-        for a, b in zip(out, got):
-            a[lo:hi] = b
+        pieces.append(got)
         if hi < len(pts):
             dt = pts[hi] - pts[hi - 1]
             q, qd, qdd = got[0][-1], got[1][-1], got[2][-1]
@@ -742,7 +739,7 @@ def _newton_segments(lk, pl, pts, dt_max, zones):
                 raise _branch_jump(lk, pts[hi - 1] * pl.omega[0], pts[hi] * pl.omega[0])
             start = (res[0], pts[hi])
         lo = hi
-    return tuple(out)
+    return tuple(np.concatenate(p) for p in zip(*pieces))
 
 
 def _bridged(lk, pl, got, t, pts, where, zone_of, zones):
@@ -933,10 +930,9 @@ def _solve_dyads(lk, pl, t, dt_max, cross=(), zones=()):
     if not np.all(check_m > _SINGULAR):
         k = int(np.argmax(~(check_m > _SINGULAR)))
         _lock_error(lk, ds, 0.0 if k == 0 else check_t[k - 1], check_t[k], cross)
-    nc = len(lk.cranks)
     w, v, sdot = ds.velocities(E, r, inner, pl.omega)
     qd = _pack(v, w)
-    if nc == 1:                     # one crank: its part is the whole velocity
+    if len(lk.cranks) == 1:                   # one crank: its part is the whole velocity
         parts = qd[:, :, None]
     else:                           # crank j turning, the others stopped
         turning = (ds.velocities(E, r, inner, wc) for wc in np.diag(pl.omega))

@@ -159,15 +159,14 @@ class Design:
 
     def as_dict(self) -> dict:
         """Plain data: lengths [mm] and every criterion's value, limit, pass and margin."""
-        out = {"a": self.a, "b": self.b, "c": self.c, "d": self.d,
-               "swing_deg": self.swing_deg, "mu1_deg": self.mu1_deg, "mu2_deg": self.mu2_deg,
-               "phi1_dd": self.phi1_dd, "phi2_dd": self.phi2_dd,
-               "feasible": self.feasible, "binding": list(self.binding),
-               "objective": self.objective, "grid_objective": self.grid_objective,
-               "shape": {"b_a": self.b / self.a, "c_a": self.c / self.a, "d_a": self.d / self.a}}
-        out["criteria"] = {n: {"value": c.value, "limit": c.limit, "passed": c.passed,
-                               "margin": c.margin} for n, c in self.criteria.items()}
-        return out
+        return {"a": self.a, "b": self.b, "c": self.c, "d": self.d,
+                "swing_deg": self.swing_deg, "mu1_deg": self.mu1_deg, "mu2_deg": self.mu2_deg,
+                "phi1_dd": self.phi1_dd, "phi2_dd": self.phi2_dd,
+                "feasible": self.feasible, "binding": list(self.binding),
+                "objective": self.objective, "grid_objective": self.grid_objective,
+                "shape": {"b_a": self.b / self.a, "c_a": self.c / self.a, "d_a": self.d / self.a},
+                "criteria": {n: {"value": c.value, "limit": c.limit, "passed": c.passed,
+                                 "margin": c.margin} for n, c in self.criteria.items()}}
 
 
 @dataclass(frozen=True)
@@ -284,9 +283,7 @@ def _eq10_roots_squared(psi, b_a, other):
     C = k1 * k1 + k2 * k2 - 2 * cp * k1 * k2
     with np.errstate(invalid="ignore"):
         sq = np.sqrt(B * B - 4 * A * C)
-        u1 = (-B + sq) / (2 * A)
-        u2 = (-B - sq) / (2 * A)
-    return tuple(np.where(u > 0, u, np.nan) for u in (u1, u2))
+        return tuple(np.where(u > 0, u, np.nan) for u in ((-B + sq) / (2 * A), (-B - sq) / (2 * A)))
 
 
 def solve_eq10(swing: float, b_a: float, *, c_a: float | None = None,
@@ -471,11 +468,10 @@ def synthesize(load: Literal["light", "medium", "heavy"] = "medium", swing: floa
                                            d_a_range, step, crank_step, swing_step)
     space = _Space(fixed, b_a_range, d_a_range, crank_range, s_range, swing)
     axes = space.grid_axes(step, crank_step, swing_step)
-    grid, cols, valid, passes = _screened_grid(space, fixed, s_range, *axes)
+    grid, cols, valid, passes = _screened_grid(space, *axes)
     rejected = {name: int((valid & ~p).sum()) for name, p in passes.items()}
     ok = np.logical_and.reduce([valid, *passes.values()])
-    designs = _candidates(grid, cols, ok, space, objective, limit, load, s_range,
-                          crank_range if "crank" in fixed else None, refine)
+    designs = _candidates(grid, cols, ok, space, objective, limit, refine)
     return SynthesisResult(tuple(designs), _OBJECTIVES[objective], load,
                            tuple(axes[1].tolist()), int(valid.sum()), rejected,
                            () if ok.any() else _conflicts(passes, valid), s_range, fixed, refine)
@@ -515,15 +511,15 @@ def _known(what: str, value, known) -> None:
                             f"{did_you_mean(str(value), known)}")
 
 
-def _screened_grid(space, fixed, s_range, cranks, swings, b_as, d_as):
+def _screened_grid(space, cranks, swings, b_as, d_as):
     """Every grid point (both eq. (10) roots) screened by the closed forms.
 
     Returns ((A, PSI, BA, OTHER, ROOT, CA, DA), the screen's columns, the
     valid mask, each criterion's pass mask).
     """
     A, PSI, BA, OTHER = (g.ravel() for g in np.meshgrid(
-        cranks, np.radians(swings), [np.nan] if "coupler" in fixed else b_as,
-        [np.nan] if {"rocker", "frame"} & set(fixed) else d_as, indexing="ij"))
+        cranks, np.radians(swings), [np.nan] if "coupler" in space.fixed else b_as,
+        [np.nan] if {"rocker", "frame"} & set(space.fixed) else d_as, indexing="ij"))
     BA, OTHER = space.ratios(A, BA, OTHER)
     u1, u2 = _eq10_roots_squared(PSI, BA, OTHER)
     A, PSI, BA, OTHER = (np.concatenate([x, x]) for x in (A, PSI, BA, OTHER))
@@ -534,16 +530,17 @@ def _screened_grid(space, fixed, s_range, cranks, swings, b_as, d_as):
     cols = _screen(A, PSI, BA, CA, DA)
     valid = cols.pop("_valid")
     passes = {name: cols[name][0] & valid for name in _SHAPE_CRITERIA}
-    psi_deg = np.degrees(PSI)
-    passes["swing"] = valid & (psi_deg >= s_range[0] - 1e-9) & (psi_deg <= s_range[1] + 1e-9)
+    (s_lo, s_hi), psi_deg = space.swing_range, np.degrees(PSI)
+    passes["swing"] = valid & (psi_deg >= s_lo - 1e-9) & (psi_deg <= s_hi + 1e-9)
     if space.limits_in_ratio:
         # a fixed length makes a ratio follow the crank: keep it in its range
         passes["ratio_ranges"] = valid & space.in_ranges(BA, DA)
     return (A, PSI, BA, OTHER, ROOT, CA, DA), cols, valid, passes
 
 
-def _candidates(grid, cols, ok, space, objective, limit, load, s_range, crank_range, refine):
-    """The passing grid points evaluated directly (and refined), one per shape, best first."""
+def _candidates(grid, cols, ok, space, objective, limit, refine):
+    """The passing grid points evaluated directly (and refined), one per shape, best first
+    (judged on the search's crank and swing ranges)."""
     A, PSI, BA, OTHER, ROOT, CA, DA = grid
     idx = np.flatnonzero(ok)
     if objective == "margin":
@@ -556,9 +553,8 @@ def _candidates(grid, cols, ok, space, objective, limit, load, s_range, crank_ra
         return (min(des.criteria[n].margin for n in _SHAPE_CRITERIA) if objective == "margin"
                 else des.criteria["acceleration_ratio"].value)
 
-    def better(x, y):
-        return x >= y if objective == "margin" else x <= y
-
+    sign = -1.0 if objective == "margin" else 1.0       # ranks by sign · value, least first
+    ranges = {"swing_range": space.swing_range, "crank_range": space.crank_range}
     designs, seen = [], set()
     for k in order:
         a = float(A[k])
@@ -568,8 +564,7 @@ def _candidates(grid, cols, ok, space, objective, limit, load, s_range, crank_ra
             continue
         seen.add(shape)
         try:
-            des = evaluate_design(a, a * BA[k], a * CA[k], a * DA[k], load=load,
-                                  swing_range=s_range, crank_range=crank_range)
+            des = evaluate_design(a, a * BA[k], a * CA[k], a * DA[k], **ranges)
         except GeometryError:
             continue
         if not des.feasible or abs(des.swing_deg - math.degrees(PSI[k])) > 1e-6:
@@ -581,17 +576,17 @@ def _candidates(grid, cols, ok, space, objective, limit, load, s_range, crank_ra
         if refine and (x := space.refine(objective, a, float(PSI[k]), float(BA[k]),
                                          float(OTHER[k]), int(ROOT[k]))) is not None:
             with contextlib.suppress(GeometryError):
-                r = evaluate_design(*x, load=load, swing_range=s_range, crank_range=crank_range)
+                r = evaluate_design(*x, **ranges)
                 # keep the refinement when it is feasible, no worse, and not
                 # a shape already reported (several grid points often climb
                 # to one optimum: the grid point then stands for itself)
-                if r.feasible and better(value_of(r), grid_value) and \
+                if r.feasible and sign * value_of(r) <= sign * grid_value and \
                         not any(_same_shape(r, other) for other in designs):
                     des = dataclasses.replace(r, objective=value_of(r), grid_objective=grid_value)
         designs.append(des)
         if len(designs) >= limit:
             break
-    designs.sort(key=lambda d: -d.objective if objective == "margin" else d.objective)
+    designs.sort(key=lambda d: sign * d.objective)
     return designs
 
 

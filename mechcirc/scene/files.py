@@ -522,8 +522,7 @@ class _SceneReader:
                                "pivot" if "pivot" in t else "link", occurrence=n,
                                expected="pivot = one of the link's ground pivots")
             body = t.get("body")
-            if not is_name(body) or body in links \
-                    or body == "ground":
+            if not is_name(body) or body in links or body == "ground":
                 raise self.err(f"torsion rod #{n + 1}: body {body!r} must be a new name "
                                "(not a link or 'ground'; several rods may share one body)",
                                "torsion", "body" if "body" in t else "link", occurrence=n,
@@ -668,8 +667,7 @@ class _SceneReader:
 
     def mass(self, m, n, name) -> float:
         """``mass`` [kg] or ``inertia`` [kg·m²] of [[masses]] entry ``n`` named ``name``."""
-        key = "mass" if "mass" in m else "inertia"
-        unit = "kg" if key == "mass" else "kg·m²"
+        key, unit = ("mass", "kg") if "mass" in m else ("inertia", "kg·m²")
         return self.number(m[key], f"{key} {name!r} [{unit}]", "masses", key, n)
 
     def loads(self) -> list:

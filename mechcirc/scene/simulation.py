@@ -266,11 +266,8 @@ def linear_matrices(model: MotionModel, theta: float):
 
     step = 1e-6
     G = np.zeros((ne, n))
-    for i in range(n):
-        yp, ym = y0.copy(), y0.copy()
-        yp[i] += step
-        ym[i] -= step
-        G[:, i] = (deformations(yp) - deformations(ym)) / (2 * step)
+    for i, dy in enumerate(step * np.eye(n, y0.size)):     # each coordinate moved by ±step
+        G[:, i] = (deformations(y0 + dy) - deformations(y0 - dy)) / (2 * step)
     # Σ k ∇δ ∇δᵀ and Σ d ∇δ ∇δᵀ (columns 0, 1 of EF); element gradients w.r.t. the
     # prescribed part do not enter; loads are linear anyway
     K, D = (G.T @ (args[7][:, j, None] * G) for j in (0, 1))
@@ -594,8 +591,7 @@ def _simulate_rk4(ctx, backend, error_estimate, notes, compile_time):
     first = start[0] if start else 0
     n_steps, nfev, wall = main[6] * (o.revolutions - first), main[5], 0.0
     if isinstance(other, tuple):
-        n_steps, nfev = n_steps + other[6] * o.revolutions, nfev + other[5]
-        wall = other[3]
+        n_steps, nfev, wall = n_steps + other[6] * o.revolutions, nfev + other[5], other[3]
     crank, order, sub = _crank_order(scene, model, theta_s, ripple, main[0], rule.stride)
     main = _in_order(main, order)       # once: the outputs and the result take this order
     out, other_ext, periodicity = _estimate_run_extrema(model, kern, theta_s, ripple, main,
@@ -856,8 +852,7 @@ def _add_points_and_aliases(scene, model, theta_s, ripple, crank, ts, ys, values
             values[alias], extrema[alias] = _rigid_acceleration(model, body, crank,
                                                                 ripple, ts, exact_rigid)
         elif target in values:
-            values[alias] = values[target]
-            extrema[alias] = extrema[target]
+            values[alias], extrema[alias] = values[target], extrema[target]
         else:
             raise MechcircError(f"{scene.source}: alias {alias!r} names {target!r}, which is "
                                 f"not an output{did_you_mean(target, values)} (outputs: "
