@@ -367,6 +367,10 @@ def _run_local(spec, have, n_todo, n_workers, batch_size, take) -> tuple[str, in
         except BaseException:
             for fut in pending:
                 fut.cancel()
+            # Ended here, none is left for the pool's shutdown to wait on (2 Ctrl-C in 10
+            # hung: a worker blocked sending back its interrupted batch, the pool joining it)
+            for proc in list((getattr(pool, "_processes", None) or {}).values()):
+                proc.kill()
             raise
     return "local", n_workers
 
@@ -380,7 +384,12 @@ def _die_with_parent(parent: int) -> None:
     elsewhere a daemon thread polls the parent's pid once a second.  A forked
     worker also closes its copies of the output lock's descriptor (a flock
     belongs to every copy: the lock would outlive a killed study in its workers).
+    Ctrl-C is the parent's to handle (it ends the workers), and SIGTERM ends a worker
+    at once (the command line's handler, inherited by the fork, would raise inside its
+    batch and send that back).
     """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
     for fd in _LOCK_FDS:
         with contextlib.suppress(OSError):
             os.close(fd)
