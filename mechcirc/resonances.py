@@ -1305,15 +1305,21 @@ def batched_roots(ds, omega_max: float | None = None):
     if not keep.size:
         return None
     pole, s, err = sorted_roots(*held_and_released(w_h[keep], w_r[keep], e_h[keep], e_r[keep]))
-    if damped:      # polished on the matrices: a root they leave over MAX_STACKED_ERROR (a
-        # slow overdamped one, κ·eps 3.6e-4: 1e-5 off) goes to find_resonances (on K)
-        fine = ~(err > MAX_STACKED_ERROR).any(axis=1)
-        return which[keep][fine], pole[fine], s[fine], err[fine]
+    if damped:                        # already polished (on the matrices)
+        return _resolved(which[keep], pole, s, err)
     # Undamped: polished on each design's K (the plan is there: the tree is, above).
     w, err = _secant_designs(ds.plan(which[keep]), s, pole, err)
     if omega_max is not None:
         w = np.where(w <= omega_max, w, np.nan)
     return (which[keep], *sorted_roots(pole, 1j * w, np.maximum(err, _EPS)))
+
+
+def _resolved(which, pole, s, err) -> tuple:
+    """:func:`batched_roots`' damped designs without those whose roots Newton on the float64
+    matrices leaves over :data:`MAX_STACKED_ERROR` (a slow overdamped root, κ·eps 3.6e-4:
+    1e-5 off), which go to :func:`find_resonances` (polished on K in double-double)."""
+    fine = ~(err > MAX_STACKED_ERROR).any(axis=1)
+    return which[fine], pole[fine], s[fine], err[fine]
 
 
 def template_levers(ds, system, which: np.ndarray) -> np.ndarray:

@@ -40,7 +40,8 @@ class Separation:
         still open at the end of the run).
     impact_velocity : float
         Relative velocity v(n1) − v(n2) at closing [m/s or rad/s] (NaN when
-        still open): the speed of the impact.
+        still open): its size the speed of the impact, its sign the flank's
+        (positive closing the gap's upper side, negative its lower side).
     angle_deg, duration_deg : float
         Shaft angle at opening [deg, 0…360] and the angle turned while open
         (NaN without a motion drive; ``duration_deg`` NaN when still open).

@@ -124,11 +124,20 @@ def transient(circuit: Circuit, t_end: float, dt: float | None = None,
     t = _grid(t_end, dt, drive)
     ss, u = state_model(circuit, linearise), drive.sample(t, amp)
     ss, z0, u_in, notes = _start(ss, drive, amp, u, steady, circuit, linearise)
+    notes.extend(_grid_notes(t, t_end))
     _flags(elements=elements, velocities=velocities)
     if backlash_elements(circuit) and not linearise:
         return _clearance_run(ss, circuit, z0, t, (u, u_in), drive, amp, rtol, notes,
                               elements, velocities)
     return _linear_run(ss, circuit, z0, t, (u, u_in), drive, notes, elements, velocities)
+
+
+def _grid_notes(t: np.ndarray, t_end: float) -> list[str]:
+    """Where the grid ends, when dt does not divide t_end (else nothing)."""
+    if abs(t[-1] - t_end) <= 1e-9 * t_end:
+        return []
+    return [f"the grid ends at {t[-1]:.6g} s: t_end/dt = {t_end / t[1]:.6g} rounded to "
+            f"{t.size - 1} steps"]
 
 
 def _flags(**flags) -> None:
@@ -370,6 +379,12 @@ def _interpolation(t: np.ndarray, u: np.ndarray, drive: Waveform, hermite: bool,
         how = "exact: the largest gap at the table's points"
     else:
         interp = float(np.abs(np.diff(u, 2)).max() / 8.0)
+        if drive.kind == "callable":    # and where a drive the samples do not resolve shows
+            mid = np.asarray(drive.sample(t[:-1] + 0.5 * np.diff(t), 1.0), dtype=float)
+            interp = max(interp, float(np.abs(mid - 0.5 * (u[:-1] + u[1:])).max()))
+            how += " and the gaps at the midpoints, the larger"
+    if interp > 0.05 * float(np.ptp(u)):
+        how += "; the steps do not resolve the drive: a smaller dt"
     if interp > 1e-13 * float(np.abs(u).max()):      # not rounding of an exact ramp
         notes.append(f"drive interpolated by cubic Hermite between samples (exact values and "
                      f"rates of the motion): its error is at most {interp:.3g} "
