@@ -174,6 +174,16 @@ def test_compare_reports_a_known_error(tmp_path, capsys):
     assert status == 2 and "no measured point" in err
 
 
+def test_compare_says_a_measured_zero_is_not_compared_for_itself(tmp_path, capsys):
+    # a measured K of 0 at 62.8 rad/s, where the model's K is -0.068j (its first resonance
+    # at 706 rad/s): it was blamed on "a pole or zero of the model's K"
+    (tmp_path / "z.s1p").write_text("# Hz Z RI R 1\n10 0 0\n20 0 -0.01\n30 0 -0.01\n")
+    status, out, err = run(["compare", STB, tmp_path / "z.s1p"], capsys)
+    assert status == 0, err
+    assert "1 point(s) not compared: on or near a pole or zero of the model's K, or a " \
+        "measured K of 0" in out
+
+
 def test_compare_missing_or_bad_file_is_a_user_error(tmp_path, capsys):
     status, _, err = run(["compare", STB, tmp_path / "none.s1p"], capsys)
     assert status == 2 and "no such file" in err

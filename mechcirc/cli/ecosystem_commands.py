@@ -161,8 +161,8 @@ def cmd_compare(args) -> int:
     print(f"{args.file} against {args.measured}: {summary['points']} measured points, "
           f"omega {summary['omega_min']:.6g} .. {summary['omega_max']:.6g} rad/s")
     if summary["compared"] < summary["points"]:
-        print(f"  {summary['points'] - summary['compared']} point(s) on or near a pole or zero "
-              "of the model's K not compared")
+        print(f"  {summary['points'] - summary['compared']} point(s) not compared: on or near a "
+              "pole or zero of the model's K, or a measured K of 0 (no dB error)")
     if summary["compared"]:
         print(f"  relative error |K_meas - K_model|/|K_model|: max {summary['rel_max']:.3g} "
               f"(at omega {summary['omega_at_rel_max']:.6g} rad/s), median "

@@ -63,8 +63,9 @@ class TransientResult:
     #: steps (a linear run with a drive known exactly at every step: harmonic, step,
     #: impulse, a table on the grid), else None.
     drive_error: float | None = None
-    #: The CSV's number format (:meth:`write_csv`, ``mechcirc transient -o``): 12 digits.
-    CSV_FORMAT = "%.12g"
+    #: The CSV's number format (:meth:`write_csv`, ``mechcirc transient -o``): 17 digits,
+    #: every float64 read back as written (as the sweep's CSV; 12 lost exact runs' digits).
+    CSV_FORMAT = "%.17g"
 
     def node(self, name: str) -> tuple[np.ndarray, np.ndarray | None]:
         """(x, v) of node ``name``."""
