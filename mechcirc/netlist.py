@@ -719,6 +719,9 @@ class _Parser:
         for key, role in (("x", "displacement"), ("v", "velocity")):
             if key in opts:
                 values[key] = self.with_unit(line, self.expr(line, opts[key]), units.get(key), role)
+            if (u := units.get(key)) is not None:       # an angle or a length (no rad: m)
+                self._note_kind(line.lineno, f".ic {node}", _unit(u.text).dim[1] == 0, u.text,
+                                u.col, (node,))
         if not values:
             line.error(f".ic for node {node!r} gives neither x= nor v=",
                        line.tokens[-1].col + len(line.tokens[-1].text), SYNTAX[".ic"])

@@ -299,3 +299,19 @@ def test_study_toml_frequencies_take_the_same_grammar():
         doc["omega"]["max"] = text
         spec = parse_spec(doc, source="s.toml", base=root / "examples")
         assert spec.omega[1] == pytest.approx(expected, rel=1e-12), text   # (min, max, n, log)
+
+
+@pytest.mark.parametrize("ic, match", [
+    (".ic a x=10 mm", "'mm' of '.ic a'.*'kg\\*m\\^2'"),
+    (".ic a v=2 m/s", "'m/s' of '.ic a'.*'kg\\*m\\^2'"),
+])
+def test_an_initial_state_in_the_other_reading_warns(ic, match, recwarn):
+    """.ic a x=10 mm on a node of inertias and torsion springs was 0.01 rad, silently (the
+    new-user pass); as an element's or a drive's unit, it now warns.  An angle there, or
+    a length on a node of kg and N/m, does not."""
+    rotary = "mass J a 0 2 kg*m^2\nspring kt a 0 800 N*m/rad\n"
+    with pytest.warns(mechcirc.errors.UnitMixWarning, match=match):
+        mechcirc.parse(rotary + ic + "\n", require_drive=False)
+    mechcirc.parse(rotary + ".ic a x=10 deg v=1 rad/s\n", require_drive=False)
+    mechcirc.parse("mass m a 0 2 kg\nspring k a 0 800 N/m\n.ic a x=10 mm\n", require_drive=False)
+    assert not [w for w in recwarn.list if w.category is mechcirc.errors.UnitMixWarning]

@@ -109,7 +109,7 @@ def _print_separations(result, u) -> None:
             continue
         print(f"contact {name}: opened {len(seps)} time(s)")
         for s in seps[:SHOWN]:
-            when = (f"at θ = {s.angle_deg:.4f} deg (revolution {s.revolution + 1}), "
+            when = (f"at θ = {s.angle_deg:.4f} deg (revolution {s.revolution}), "
                     if s.revolution >= 0 else "") + f"t = {s.t_open:.6g} s"
             span = (f"{s.duration_deg:.4f} deg, " if s.revolution >= 0 else "") + \
                 f"{s.duration:.4g} s"
