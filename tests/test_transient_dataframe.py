@@ -63,3 +63,13 @@ def test_the_csv_reads_back_every_value_as_written():
     r.write_csv(fh)
     back = np.loadtxt(io.StringIO(fh.getvalue()), delimiter=",", skiprows=1)
     np.testing.assert_array_equal(back, np.column_stack(list(r.columns().values())))
+
+
+def test_an_element_force_a_run_did_not_keep_says_so():
+    """elements=False: 'no element named k1 (elements: none)' for an element that is there."""
+    from mechcirc.errors import UnknownNameError
+
+    c = parse("mass m a 0 2\nspring k1 a 0 800\ndrive F a 0 force=3\n")
+    with pytest.raises(UnknownNameError, match="in this run, which kept none \\(elements=True"):
+        transient(c, 0.1, 1e-3, "step", elements=False).element_force("k1")
+    assert transient(c, 0.1, 1e-3, "step").element_force("k1").shape == (101,)

@@ -74,7 +74,8 @@ class TransientResult:
 
     def element_force(self, name: str) -> np.ndarray:
         """Force [N] through element ``name`` (n1 → n2)."""
-        return self.force[:, name_index(name, self.elements)]
+        return self.force[:, name_index(name, self.elements, where="" if self.elements else
+                                        " in this run, which kept none (elements=True keeps them)")]
 
     def __repr__(self) -> str:
         """A short summary (the arrays are in the attributes, not in the repr)."""
