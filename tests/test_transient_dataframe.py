@@ -73,3 +73,12 @@ def test_an_element_force_a_run_did_not_keep_says_so():
     with pytest.raises(UnknownNameError, match="in this run, which kept none \\(elements=True"):
         transient(c, 0.1, 1e-3, "step", elements=False).element_force("k1")
     assert transient(c, 0.1, 1e-3, "step").element_force("k1").shape == (101,)
+
+
+def test_a_run_without_a_drive_is_labelled_by_its_elements_units():
+    """A rotary netlist with no drive (an .ic only) was labelled in m and m/s."""
+    rotary = parse("mass J a 0 2 kg*m^2\nspring kt a 0 800 N*m/rad\n.ic a x=10 deg\n",
+                   require_drive=False)
+    assert transient(rotary, 0.1, 1e-3).units["x"] == "rad"
+    plain = parse("mass m a 0 2\nspring k a 0 800\n.ic a x=0.01\n", require_drive=False)
+    assert transient(plain, 0.1, 1e-3).units["x"] == "m"

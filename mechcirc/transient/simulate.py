@@ -559,7 +559,8 @@ def _outputs(ss, circuit, t, Z, u_true, u, h, drive, method, err, notes, want=Tr
                            drive_force=drive_force, drive_velocity=drive_velocity,
                            error=err, method=method, notes=notes, name=circuit.name,
                            drive_name=circuit.drive.name if circuit.drive is not None else None,
-                           units=units_of(circuit.drive),
+                           units=units_of(circuit.drive if circuit.drive is not None else
+                                          all(map(circuit.rotational, circuit.elements))),
                            clearances={e.name: (e.n1, e.n2, e.backlash)
                                        for e, _ in backlash_elements(circuit)},
                            separations=_separations(t, Ec, Wc, clear, drive) if clear else [],
