@@ -211,7 +211,9 @@ def test_crosscheck_reports_progress_per_transient_run():
     ("time,value\n0,1\nx,2\n", "d.csv:3:1: error: 'x' is not a number (expected time,value"),
     ("time,value\n0,1\n1,y\n", "d.csv:3:3: error: 'y' is not a number"),
     ("0,1\n1,2,3\n", "d.csv:2:5: error: 3 column(s) (expected two columns time,value)"),
-    ("0,nan\n1,2\n", "d.csv:1:1: error: non-finite time or value"),
+    # located at the value (it was at the row's first column, the new-user pass)
+    ("0,nan\n1,2\n", "d.csv:1:3: error: 'nan' is not finite"),
+    ("0,1\ninf,2\n", "d.csv:2:1: error: 'inf' is not finite"),
     ("0,1\n1,2\n0.5,3\n", "d.csv:3:1: error: time 0.5 is not after the previous 1"),
     ("time,value\n0,1\n", "d.csv: needs at least two samples (time,value)"),
 ])

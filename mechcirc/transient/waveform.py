@@ -142,7 +142,9 @@ def read_csv_drive(path: str) -> Waveform:
             raise NetlistError(f"{row[j].strip()!r} is not a number", path, lineno, cols[j],
                                "time,value: two numbers") from None
         if not (math.isfinite(t) and math.isfinite(v)):
-            raise NetlistError("non-finite time or value", path, lineno, 1, "finite numbers")
+            j = int(math.isfinite(t))           # the first of the two that is not
+            raise NetlistError(f"{row[j].strip()!r} is not finite", path, lineno, cols[j],
+                               "finite numbers")
         if times and t <= times[-1]:
             raise NetlistError(f"time {t:g} is not after the previous {times[-1]:g}", path,
                                lineno, cols[0], "times that increase")
