@@ -764,8 +764,7 @@ def _stable(eq, cyc, th, w, steps):
     z = np.array([eq.rest(t, w) for t in th]) if eq.n else np.empty((th.size, 0))
     with np.errstate(divide="ignore", invalid="ignore"):
         a = [eq.evaluate(th, v, z)[:, -5] / v for v in (w, w * (1 + 1e-6))]
-        n = cyc * float(np.max(np.abs(a[1] - a[0]))) / (1e-6 * w) / (
-            3.2 if eq.tableau[3] else 1.39)
+        n = cyc * float(np.max(np.abs(a[1] - a[0]))) / (1e-6 * w * (3.2 if eq.tableau[3] else 1.39))
     return max(64, math.ceil(steps), math.ceil(n)) if n <= MAX_STEPS else 0
 
 
