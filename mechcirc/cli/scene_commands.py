@@ -338,7 +338,7 @@ def _print_extrema(extrema: dict, units: dict) -> None:
     """The table of each output's least and largest value over the cycle, with its unit."""
     print(f"{'quantity':<28} {'min':>14} {'max':>14}  unit")
     for k, (lo, hi) in extrema.items():
-        print(f"{k:<28} {lo:>14.6g} {hi:>14.6g}  {units[k]}")
+        print(f"{k:<28} {lo + 0.0:>14.6g} {hi + 0.0:>14.6g}  {units[k]}")
 
 
 def _shaft(args, scene) -> int:

@@ -200,7 +200,7 @@ def test_cli_resolves_the_shaft_default_by_mode(tmp_path, capsys):
     assert json.loads(out)["method"] == "rk4"
 
 
-def test_a_small_flywheel_is_stepped_stably_and_agrees_with_lsoda():
+def test_a_small_flywheel_is_stepped_stably_and_agrees_with_lsoda(tmp_path, capsys):
     """A rigid slider-crank (2.5 kg block, crank 40 mm, rod 150.0 mm at 10 mm offset) on a
     table motor T = 10 (1 − ω/50) N·m and a flywheel of 1e-5 or 1e-7 kg·m²: near the dead
     centres the shaft's inertia falls to the flywheel's and its speed relaxes within
@@ -243,3 +243,13 @@ def test_a_small_flywheel_is_stepped_stably_and_agrees_with_lsoda():
         assert any("fixed steps would need over" in n for n in res.notes) == (jf < 1e-6)
         assert abs(2 * math.pi / sol.y[1, -1] / res.omega_mean - 1) <= 1e-10
         assert np.max(np.abs(sol.sol(res.theta)[0] / res.speed - 1)) <= 3e-8
+    # the command line's table: no load, so 0, not "-0" (and the refusal printed "peak -0")
+    from cli_helpers import run
+
+    path = tmp_path / "rigid.toml"
+    path.write_text(text, encoding="utf-8")
+    status, out, err = run(["simulate", str(path), "--shaft", "--flywheel", "1e-5",
+                            "--points", "16"], capsys)
+    assert status == 0, err
+    assert next(ln for ln in out.splitlines() if ln.startswith("load_torque")).split()[1:3] \
+        == ["0", "0"]
