@@ -79,3 +79,23 @@ def test_harmonic_forcing_of_a_lightly_damped_sley_and_of_an_undamped_one():
     assert [r["verdict"] for r in rows] == ["agrees"] + ["cannot be measured"] * 2
     assert rows[0]["rel_error"] < 1e-10
     assert all(r["why"] == HARMONIC_UNSETTLED for r in rows[1:])
+
+
+def test_so_near_a_dead_centre_the_resonance_rows_cannot_be_measured():
+    """At 79.06387° (|μ| = 2.8e-9 by the closed form, above the refusal's 1e-9) the drive
+    hardly sees the sley's mode: its resonance and anti-resonance in the netlist cancel
+    within rounding, one resonance was missing, and the cross-check said DISAGREES (exit 3;
+    the new-user pass) though the netlist and the model agree.  Below |μ| = 1e-6 check (a)
+    now cannot be measured; 1e-4 rad further out it agrees."""
+    from mechcirc.sley.crosscheck import crosscheck_sley
+
+    dc = ref.front_dead_centre()
+    p = preset("one-side", 3)
+    for theta, near in ((math.radians(79.06387), True), (dc + 1e-4, False)):
+        mu = abs(ref.rocker(theta)[1])
+        assert (1e-9 < mu < 1e-6) == near
+        doc, _ = crosscheck_sley(p, theta)
+        rows = doc["resonances"]
+        assert [r["verdict"] for r in rows] == ["cannot be measured" if near else "agrees"] * 2
+        assert doc["verdict"] == "agrees"
+        assert all("so near a dead centre" in r["why"] for r in rows) == near
