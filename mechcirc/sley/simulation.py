@@ -404,8 +404,12 @@ def _result(params: SleyParameters, model, m, theta0: float, linkage: list,
 
 # -------------------------------------------------------------------- batch
 def _batch_worker(job):
+    """One model of :func:`simulate_batch` → (result, its warnings' messages and classes),
+    the warnings brought back from a worker process (they were lost there)."""
     params, revolutions, method, kwargs = job
-    return simulate_params(params, revolutions, method, **kwargs)
+    with warnings.catch_warnings(record=True, action="always") as caught:
+        result = simulate_params(params, revolutions, method, **kwargs)
+    return result, [(w.message, w.category) for w in caught]
 
 
 def simulate_batch(params_list: list[SleyParameters] | None = None, revolutions: int = 5,
@@ -435,6 +439,10 @@ def simulate_batch(params_list: list[SleyParameters] | None = None, revolutions:
     jobs = [(p, revolutions, method, kwargs) for p in params_list]
     processes = processes or os.cpu_count() or 1
     if processes == 1 or len(jobs) == 1:
-        return [_batch_worker(j) for j in jobs]
-    with ProcessPoolExecutor(max_workers=min(processes, len(jobs))) as pool:
-        return list(pool.map(_batch_worker, jobs))
+        done = [_batch_worker(j) for j in jobs]
+    else:
+        with ProcessPoolExecutor(max_workers=min(processes, len(jobs))) as pool:
+            done = list(pool.map(_batch_worker, jobs))
+    for message, category in (w for _, caught in done for w in caught):
+        warnings.warn(message, category, stacklevel=2)
+    return [result for result, _ in done]
