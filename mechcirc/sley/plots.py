@@ -42,12 +42,14 @@ def plot_result(result, fig=None, *, ax=None):
     panel = axes[1]
     panel.plot(deg, result.eps4P, lw=0.8, label="ε4P (sley)")
     panel.plot(deg, result.eps4T, lw=1.2, ls="--", color="k", label="ε4T = ν ω² (rigid)")
-    panel.axvspan(math.degrees(result.phiP - result.params.alpha / 2),
-               math.degrees(result.phiP + result.params.alpha / 2), color="0.9",
-               label=f"beat-up window (α = {result.alpha_deg:g}°)")
+    lo = math.degrees(result.phiP - result.params.alpha / 2) % 360
+    for a, label in ((lo, "beat-up window"), (lo - 360, None)):
+        b = a + result.alpha_deg
+        if result.params.M0 > 0 and max(a, 0) < min(b, 360):     # wrapped at 0°/360°
+            panel.axvspan(max(a, 0), min(b, 360), color="0.9",
+                          label=label and f"{label} (α = {result.alpha_deg:g}°)")
     panel.set_ylabel("sley acceleration [rad/s²]")
     axes[2].set_xlabel("crank angle φ2 [deg]")
-    axes[2].set_xlim(0, 360)
     p = result.params
     fig.suptitle(f"{p.label or p.drive}: revolution {result.revolution}, ω = {p.omega:g} rad/s, "
                  f"ϕ = {p.clearance:g} rad, M0 = {p.M0:g} N·m, α = {result.alpha_deg:g}°",
@@ -55,4 +57,5 @@ def plot_result(result, fig=None, *, ax=None):
     for a in axes:
         a.legend(loc="upper right", fontsize=8)
         a.grid(alpha=0.3)
+        a.set_xlim(0, 360)
     return laid_out(False, fig, ax, grid)

@@ -99,3 +99,29 @@ def test_so_near_a_dead_centre_the_resonance_rows_cannot_be_measured():
         assert [r["verdict"] for r in rows] == ["cannot be measured" if near else "agrees"] * 2
         assert doc["verdict"] == "agrees"
         assert all("so near a dead centre" in r["why"] for r in rows) == near
+
+
+@pytest.mark.parametrize("variant, alpha, spans", [
+    (3, 10.0, [(74.0639, 84.0639)]),
+    (3, 200.0, [(339.0639, 360.0), (0.0, 179.0639)]),     # wrapped at 0°/360°
+    (1, 10.0, []),                                          # M0 = 0: no beat-up window
+])
+def test_the_sley_plot_shades_the_beat_up_window_where_m4_acts(variant, alpha, spans):
+    """The window φP ± α/2 (φP = 79.0639°, the front dead centre by the closed form) was
+    shaded unwrapped ([0°, 179.06°] for α = 200°, where M4 also acts on [339.06°, 360°))
+    and shaded for the variants without a beat-up moment (the new-user pass)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from mechcirc.sley.plots import plot_result
+    from mechcirc.sley.simulation import simulate_params
+
+    assert math.degrees(ref.front_dead_centre()) == pytest.approx(79.0639, abs=1e-4)
+    p = preset("one-side", variant).replace(alpha=math.radians(alpha))
+    fig = plot_result(simulate_params(p, revolutions=1, points_per_revolution=36,
+                                      error_estimate=False))
+    got = [x for r in fig.axes[1].patches for x in (r.get_x(), r.get_x() + r.get_width())]
+    assert got == pytest.approx([x for span in spans for x in span], abs=1e-4)
+    assert all(a.get_xlim() == (0.0, 360.0) for a in fig.axes)
+    plt.close(fig)
