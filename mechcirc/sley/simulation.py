@@ -373,7 +373,7 @@ def _result(params: SleyParameters, model, m, theta0: float, linkage: list,
     v = m.values
     both = params.drive == "both-sides"
     w = params.omega
-    # the rigid rocker's ν ω² from the scene's tables (within 6e-10 of the closed form's ν,
+    # the rigid rocker's ν ω² from the scene's tables (within 1.1e-10 of the closed form's ν,
     # table_error()); its extrema below from the closed form (the scene is asked not to
     # refine its own: exact_rigid=False)
     phiP, sley_off, nlo, nhi = linkage
