@@ -286,7 +286,7 @@ def plot_sweep(result, title: str | None = None, resonances=(), peak=None, *, ax
         curves = in_unit(w, unit), np.abs(K), np.degrees(np.angle(K)), np.abs(R), flags
     if ax is not None:
         _draw_K(ax, result, curves, resonances, unit, mark=True)
-        ax.set_title(title or f"{result.name}: kinematic characteristic K = v/Q")
+        ax.get_title() or ax.set_title(title or f"{result.name}: kinematic characteristic K = v/Q")
         return ax
     return _bode_figure(fig, result, curves, resonances, peak, unit, dict(extra or {}), title)
 
@@ -505,7 +505,7 @@ def plot_transient(result, nodes=None, what: str = "x", elements=None, title: st
         if result.drive_name else "no drive")
     if ax is not None:
         _nodes_panel(ax, result, names, what)
-        ax.set(xlabel="t [s]", title=title)
+        ax.set(xlabel="t [s]", title=ax.get_title() or title)
         ax.grid(True, alpha=0.3)
         return ax
     gaps = list(result.clearances.items())[:MAX_CLEARANCE_PANELS]
@@ -606,10 +606,10 @@ def plot_forces(rows, omega: float, name: str = "circuit", title: str | None = N
     ax.set(ylabel=f"|Q| [{u['Q']}]", xlabel="element")
     handles = [Patch(facecolor=colour, label=kind) for kind, colour in KIND_COLOURS.items()
                if any(r.kind == kind for r in rows)]
-    ax.legend(handles=handles, loc="best", fontsize="small")
+    ax.legend(handles=ax.get_legend_handles_labels()[0] + handles, loc="best", fontsize="small")
     ax.grid(True, axis="y", which="both", alpha=0.3)
-    ax.set_title(title or f"{name}: element forces at ω = {omega:.6g} rad/s "
-                          f"({omega / (2 * np.pi):.4g} Hz)")
+    ax.get_title() or ax.set_title(title or f"{name}: element forces at ω = {omega:.6g} rad/s "
+                                   f"({omega / (2 * np.pi):.4g} Hz)")
     return laid_out(made, fig, ax)
 
 
@@ -694,7 +694,7 @@ def plot_study(result, params, column: str, name: str = "study", title: str | No
     else:
         _study_scatter(fig, ax, ok, bad, params[:2], column, units)
     ax.grid(True, which="both", alpha=0.3)
-    ax.set_title(title or f"{name}: {column} over {len(result.rows)} points")
+    ax.get_title() or ax.set_title(title or f"{name}: {column} over {len(result.rows)} points")
     return laid_out(made, fig, ax)
 
 
@@ -838,8 +838,8 @@ def plot_speed_map(result, title: str | None = None, *, ax=None, min_weight: flo
     ax.set(xlabel="machine speed [rpm]", ylabel=f"peak {word} over the cycle [{u['Q']}]")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="best", fontsize="small")
-    ax.set_title(title or f"{result.name}: peak drive {word} vs speed (red: k·Ω = ωₙ)",
-                 pad=14)
+    ax.get_title() or ax.set_title(
+        title or f"{result.name}: peak drive {word} vs speed (red: k·Ω = ωₙ)", pad=14)
     return laid_out(made, fig, ax)
 
 
@@ -869,7 +869,7 @@ def plot_mode(mode, name: str = "circuit", title: str | None = None, *, ax=None,
     at = (f"ω = {r.omega:.6g} rad/s ({r.f_hz:.4g} Hz)" if unit == "rad/s" else
           f"{'f' if unit == 'Hz' else 'n'} = {in_unit(r.omega, unit):.6g} {unit}")
     label = f"{r.kind} {at}" + (f", ζ = {r.zeta:.3g}" if r.zeta else "")
-    ax.set_title(title or f"{name}: {label}")
+    ax.get_title() or ax.set_title(title or f"{name}: {label}")
     if not mode.shape:           # an overdamped root: its note, on an empty panel
         import textwrap
 

@@ -196,6 +196,20 @@ def test_ax_is_drawn_on_and_returned_and_the_callers_artist_kept(made):
         assert fig.axes == [mine], name
 
 
+def test_the_callers_title_and_legend_entries_are_kept(made):
+    """Sweep.plot(ax=) and plot_forces(ax=) replaced the caller's title, and plot_forces
+    its legend, the caller's own line's entry gone (the new-user pass); a title of the
+    plot's own goes only where the caller has none."""
+    for name, call in _single(made):
+        fig, mine, line = _callers_figure()
+        line.set_label("mine")
+        mine.set_title("my title")
+        call(mine)
+        assert mine.get_title() == "my title", name
+        legend = mine.get_legend()
+        assert legend is None or "mine" in [t.get_text() for t in legend.get_texts()], name
+
+
 def test_plot_cycle_on_ax_draws_the_resonances_as_the_upper_panel(made):
     """The panel plot_cycle(ax=) draws is the Figure's upper panel, line for line."""
     from mechcirc.scene.cycle import plot_cycle

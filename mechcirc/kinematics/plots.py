@@ -125,7 +125,8 @@ def draw_design(design, ax):
     ax.set(xlabel="x [mm]", ylabel="y [mm]")
     ax.grid(alpha=0.3)
     ax.legend(fontsize="small", loc="best")
-    ax.set_title(f"#1: a={design.a:.2f} b={design.b:.2f} c={design.c:.2f} d={design.d:.2f} mm")
+    ax.get_title() or ax.set_title(f"#1: a={design.a:.2f} b={design.b:.2f} c={design.c:.2f} "
+                                   f"d={design.d:.2f} mm")
     return ax
 
 
@@ -328,5 +329,6 @@ def plot_linkage(linkage, state, paths=None, *, ax=None, fig=None):
     a.grid(alpha=0.3)
     unit = getattr(linkage, "units", "") or "length"
     a.set(xlabel=f"x [{unit}]", ylabel=f"y [{unit}]")
-    a.set_title(f"{linkage.name} at θ = {math.degrees(state.theta):.4g}° (first crank)")
+    a.get_title() or a.set_title(f"{linkage.name} at θ = {math.degrees(state.theta):.4g}° "
+                                 "(first crank)")
     return laid_out(False, fig, ax, axes)

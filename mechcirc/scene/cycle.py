@@ -391,7 +391,8 @@ def _resonance_panel(a1, cmap: CycleMap, deg, unit: str) -> None:
         a1.plot(c["theta_deg"], in_unit(c["omega"], unit), "kx", ms=6,
                 label="resonance = h·Ω" if n == 0 else None)
     a1.set(ylabel=f"natural frequency [{unit}]  (dotted: h·Ω)",
-           title="resonances (K = 0, drive held) over the cycle; × where one meets h·Ω")
+           title=a1.get_title() or "resonances (K = 0, drive held) over the cycle; × where one "
+           "meets h·Ω")
     a1.legend(fontsize=7, loc="upper left")
 
 

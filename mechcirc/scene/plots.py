@@ -112,9 +112,9 @@ def plot_mode(scene, theta: float, n: int = 1, *, kind: str = "resonance", ax=No
     fig, ax, made = one_panel(ax, (7, 6))
     _draw_displaced(ax, scene, state, {p: k * np.asarray(d) for p, d in raw.items()})
     r = mode.resonance
-    ax.set_title(f"{kind} {n}: ωn = {r.omega:.6g} rad/s, ζ = {r.zeta:.3g}, at θ = "
-                 f"{math.degrees(theta):.6g}° (largest displacement drawn "
-                 f"{exaggeration:.0%} of the linkage)", fontsize=9)
+    ax.get_title() or ax.set_title(f"{kind} {n}: ωn = {r.omega:.6g} rad/s, ζ = {r.zeta:.3g}, at "
+                                   f"θ = {math.degrees(theta):.6g}° (largest displacement "
+                                   f"drawn {exaggeration:.0%} of the linkage)", fontsize=9)
     ax.set(aspect="equal", xlabel=f"x [{lk.units}]", ylabel=f"y [{lk.units}]")
     return fig if made else ax
 
