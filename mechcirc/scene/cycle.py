@@ -476,7 +476,6 @@ def _point_drive(scene: Scene, km, theta):
     i = km.point_names.index(d.point)
     v0 = lk.solve(float(theta)).velocities[d.point]
     u = np.asarray(v0, float) / np.hypot(*v0)
-    x = km.points[:, i] @ u * L
-    dx = km.velocities[:, i] @ u * (L / w)
-    ddx = km.accelerations[:, i] @ u * (L / w ** 2)
+    x, dx, ddx = (a[:, i] @ u * (L / w ** k)      # d^k/dθ^k = (d^k/dt^k) / ω^k
+                  for k, a in enumerate((km.points, km.velocities, km.accelerations)))
     return x, dx, ddx, f"displacement of point {d.point} along ({u[0]:.6g}, {u[1]:.6g})"

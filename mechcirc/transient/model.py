@@ -177,12 +177,11 @@ def state_space(circuit: Circuit, *, linearise: bool = False) -> StateSpace:
     B1, B0 = _split(Mq, np.eye(nq), np.abs(MT).max(initial=0.0))
     p = _particular(work, index, M, Cons, T @ B1) if vel and d is not None else np.zeros(n)
     # Generalised force per unit drive value u and per unit drive displacement X.
+    Fu, Fx = np.zeros(nq), np.zeros(nq)
     if kind == "force":
-        Fu, Fx = T.T @ g, np.zeros(nq)
+        Fu = T.T @ g
     elif vel:
         Fu, Fx = -(T.T @ D @ p), -(T.T @ K @ p)
-    else:
-        Fu, Fx = np.zeros(nq), np.zeros(nq)
     Bd, Bs = _split(Dq, B0, np.abs(DT).max(initial=0.0))
     n1, n0, ns = B1.shape[1], Bd.shape[1], Bs.shape[1]
     Y = np.hstack([B1, Bd])
