@@ -186,7 +186,7 @@ def _label_resonances(ax, resonances, per_unit: float) -> None:
     scale = np.log if ax.get_xscale() == "log" else (lambda v: v)
     lo, hi = (scale(v) for v in ax.get_xlim())
     last: list[float] = []                      # per row: position of its last label
-    for w in sorted((r.omega_d or r.omega) / per_unit for r in resonances):
+    for w in sorted((r.omega_d or r.omega) / per_unit for r in resonances if r.zeta < 1):
         pos = (scale(w) - lo) / (hi - lo) if w > 0 and hi != lo else 0.0
         row = next((i for i, p in enumerate(last) if pos - p >= LABEL_GAP), len(last))
         last[row:row + 1] = [pos]
@@ -197,21 +197,23 @@ def _label_resonances(ax, resonances, per_unit: float) -> None:
 
 def _mark_resonances(axes, resonances, legend_ax, per_unit: float = 1.0,
                      legend: bool = True):
-    """Vertical lines at each root's ω (``per_unit`` rad/s per unit of the x axis), one
-    line per kind and panel (the roots' lines joined by NaN breaks, as ``axvline``
+    """Vertical lines at each root's ω_d, where K has its extreme (``per_unit`` rad/s per
+    unit of the x axis; an overdamped root has none and is not drawn), one line per kind and
+    panel (the roots' lines joined by NaN breaks, as ``axvline``
     would draw each); ``legend=False`` leaves ``legend_ax``'s legend to the caller
     (made once)."""
     from matplotlib.lines import Line2D
 
     for kind in dict.fromkeys(r.kind for r in resonances):     # in order of appearance
-        at = [(r.omega_d or r.omega) / per_unit for r in resonances if r.kind == kind]
+        at = [(r.omega_d or r.omega) / per_unit for r in resonances
+              if r.kind == kind and r.zeta < 1]
         x = [v for w in at for v in (w, w, math.nan)]
         for ax in axes:
             ax.add_line(Line2D(
                 x, [0.0, 1.0, math.nan] * len(at), transform=ax.get_xaxis_transform(),
                 color="0.5", lw=0.8, ls="-" if kind == "resonance" else "--",
-                label=("resonance (K = 0)" if kind == "resonance" else "anti-resonance (K = ∞)")
-                if ax is legend_ax else ""))
+                label=("resonance (K = 0" if kind == "resonance" else "anti-resonance (K = ∞")
+                + ", at ω_d)" if ax is legend_ax else ""))
     if resonances and legend:
         legend_ax.legend(loc="best", fontsize="small")
 

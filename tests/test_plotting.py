@@ -278,6 +278,25 @@ def test_sweep_plot_marks_resonances_by_default():
     assert _root_marks(marked) == pytest.approx(sorted(inband), rel=1e-12)
 
 
+def test_sweep_plot_marks_damped_roots_at_omega_d_and_no_overdamped_one():
+    """A damped chain's roots are drawn at ω_d (where the legend now says so; the tables
+    give ω = |s|), and an overdamped root (ζ = 1: no frequency where K has an extreme) is
+    not drawn: it was, at |s|, stretching the x axis far past the sweep (the new-user
+    pass).  ω_d of the one underdamped resonance from its own ω and ζ."""
+    from matplotlib.figure import Figure
+
+    c = mechcirc.parse("drive V a 0 velocity=1\nspring k1 a b 1e4\nmass m b 0 1\n"
+                       "damper c b d 30\nspring k2 d 0 1e4\n")
+    found = c.resonances(omega_max=1e5)
+    assert any(r.zeta == 1.0 for r in found) and any(r.zeta < 1 for r in found)
+    ax = Figure().add_subplot()
+    c.sweep(np.geomspace(10, 1e3, 100)).plot(ax=ax, resonances=found)
+    want = sorted(r.omega * np.sqrt(1 - r.zeta ** 2) for r in found if r.zeta < 1)
+    assert _root_marks(ax) == pytest.approx(want, rel=1e-9)
+    assert ax.get_xlim()[1] < 2e3
+    assert any("at ω_d" in t.get_text() for t in ax.get_legend().get_texts())
+
+
 def test_sweep_plot_is_refined_around_the_exact_roots(stb_sweep):
     """stb_heald's close pair 706.45 / 709.55 rad/s falls between two grid points
     (2.3 % apart): the plotted curve gets points within 1e-3 of every root, and the
