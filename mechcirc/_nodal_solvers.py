@@ -188,8 +188,7 @@ def _dd_lu(X, good):
 
 def _csub_at(y, at, t) -> None:
     """y[at] −= t in place in complex double-double (y and t as re hi, re lo, im hi, im lo)."""
-    re = dd_sub(y[0][at], y[1][at], *t[:2])
-    im = dd_sub(y[2][at], y[3][at], *t[2:])
+    re, im = dd_sub(y[0][at], y[1][at], *t[:2]), dd_sub(y[2][at], y[3][at], *t[2:])
     for v, u in zip(y, (*re, *im)):
         v[at] = u
 

@@ -900,8 +900,7 @@ def _searched_extremes(ds: Designs, which: NDArray, lo: float, hi: float,
             value, omega = np.where(take, v[:, r], value), np.where(take, x[:, r], omega)
         found[quantity] = value, omega
     (kmax, w_kmax), (smax, w_smax) = found["K"], found["S"]
-    amp = np.abs(ds.amplitude[which])
-    force = ds.circuit.require_drive().kind == "force"
+    amp, force = np.abs(ds.amplitude[which]), ds.circuit.require_drive().kind == "force"
     out = {"K_max": kmax, "omega_at_K_max": w_kmax, "K_min": 1.0 / smax,
            "omega_at_K_min": w_smax, "Q0_max": amp if force else amp * smax,
            "omega_at_Q0_max": np.full(which.size, lo) if force else w_smax}

@@ -202,8 +202,7 @@ def _sweep(system: NodalSystem, omega: NDArray, refine: bool, steps: int,
     :func:`solver`; the compiled kernels serve the sparse path at real ω (:func:`kernels`).
     """
     pat, rhs = pattern(system), system.injection()
-    solve_with = solver(system)
-    at = np.arange(omega.size) if at is None else at
+    solve_with, at = solver(system), (np.arange(omega.size) if at is None else at)
     kern = None if solve_with.kind == "dense" or np.iscomplexobj(omega) \
         else kernels(system.size * at.size)
     # Unrefined on the numpy path: the error estimate from a float64 residual (a

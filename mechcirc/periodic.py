@@ -439,8 +439,7 @@ def _harmonics_round(circuit, motion, Omega, kmax, tol, harmonics, method, done_
     else:
         ok = tail <= tol * scale[:, None]
         n = np.where(ok.any(axis=1), np.argmax(ok, axis=1) + 1, kmax)
-    used = k[None, :] <= n[:, None]
-    err = tail[np.arange(P), n - 1]
+    used, err = k[None, :] <= n[:, None], tail[np.arange(P), n - 1]
     errK = sw.error.reshape(Qk.shape)
     err = err + np.sum(np.where(used & np.isfinite(errK), errK, 0.0) * mag, axis=1)
     if ended:

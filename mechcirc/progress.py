@@ -60,8 +60,7 @@ class Progress:
 
     def _draw(self, now: float) -> None:
         frac = self.done / self.total if self.total else 1.0
-        filled = int(round(frac * self.width))
-        elapsed = now - self.start
+        filled, elapsed = int(round(frac * self.width)), now - self.start
         rate = self.done / elapsed if elapsed > 0 else 0.0
         eta = (self.total - self.done) / rate if rate > 0 else float("inf")
         eta_text = f"{eta:5.0f} s left" if eta != float("inf") else "      "

@@ -507,8 +507,7 @@ def _modes(M, D, Ks, G, damped: bool, omega_max=None, vectors: bool = False):
         raise SolverError("resonances: the network's matrices overflow float64 (element "
                           "values or lever ratios near 1e308 combine beyond it)",
                           status="overflow")
-    scale_m = np.abs(Mr).max() or 1.0
-    scale_k = np.abs(Kr).max() or 1.0
+    scale_m, scale_k = (np.abs(X).max() or 1.0 for X in (Mr, Kr))
     # sqrt of each: the quotient itself can leave float64 (1e-200 / 1e180).
     w_ref = math.sqrt(scale_k) / math.sqrt(scale_m)
     if not (math.isfinite(w_ref) and w_ref > 0):
@@ -911,8 +910,7 @@ def _damped(M, D, K, vectors: bool = False) -> tuple:
     mu = np.linalg.eigvalsh(M)
     massless = int(np.sum(mu <= 1e-13 * max(mu.max(initial=0.0), 1e-300)))
     eye, zero = np.eye(n), np.zeros((n, n))
-    A = np.block([[zero, eye], [-K, -D]])
-    B = np.block([[eye, zero], [zero, M]])
+    A, B = np.block([[zero, eye], [-K, -D]]), np.block([[eye, zero], [zero, M]])
     from scipy.linalg import eig            # QZ: numpy has no generalised eig
 
     out = eig(A, B, right=vectors, homogeneous_eigvals=True)
@@ -1212,8 +1210,7 @@ def secant_steps(g_and_delta, admissible, s0, e0, offset, active=True, iteration
         # with no digit known is no step: the secant stops there.
         dc = np.where((gc == 0) & ~np.isfinite(dc), db, dc)
         ok &= np.isfinite(gc) & np.isfinite(dc)
-        step = np.where(ok, np.abs(c - b), step)
-        slope = np.where(ok, sl, slope)
+        step, slope = np.where(ok, np.abs(c - b), step), np.where(ok, sl, slope)
         a, ga = np.where(ok, b, a), np.where(ok, gb, ga)
         b, gb, db = np.where(ok, c, b), np.where(ok, gc, gb), np.where(ok, dc, db)
         with np.errstate(all="ignore"):
@@ -1224,8 +1221,7 @@ def secant_steps(g_and_delta, admissible, s0, e0, offset, active=True, iteration
         # stopped by coming back to an earlier point (a zero step) far from the root (|g|
         # large for its slope) has not converged.
         err = (db / np.abs(slope) + np.maximum(step, np.abs(gb / slope))) / np.abs(b)
-        moved = np.abs(b - s0) / np.abs(s0)
-        newton = np.abs(g0 / slope0) / np.abs(s0)
+        moved, newton = np.abs(b - s0) / np.abs(s0), np.abs(g0 / slope0) / np.abs(s0)
     bad = ~np.isfinite(err) | ~np.isfinite(b) | (moved > 1e-3)
     # (g not known at a start: K does not confirm a root near s0, whatever the eigen-solver said)
     newton = np.where(np.isfinite(newton) & known, 10 * newton, np.where(known, 0.0, np.inf))
@@ -1738,8 +1734,7 @@ def _newton_det(sig, live, Ms, Ds, Ks, steps: int = 3) -> tuple:
             delta = 1.0 / np.trace(sol[..., :k], axis1=-2, axis2=-1)
         null = sol[..., k]
         good = np.isfinite(delta)
-        x = np.where(good, x - delta, x)
-        step = np.where(good, np.abs(delta), 0.0)
+        x, step = np.where(good, x - delta, x), np.where(good, np.abs(delta), 0.0)
     out, size = sig.copy(), np.zeros(sig.shape)
     out[d, r], size[d, r] = x, step
     return out, size, _condition(x, null, M, D, K)

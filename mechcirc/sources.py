@@ -102,8 +102,7 @@ def read_source(path: str | os.PathLike, expected: str) -> str:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
         before = data[:exc.start]
-        line = before.count(b"\n") + 1
-        col = exc.start - (before.rfind(b"\n") + 1) + 1
+        line, col = before.count(b"\n") + 1, exc.start - (before.rfind(b"\n") + 1) + 1
         raise NetlistError(f"byte 0x{data[exc.start]:02x} is not valid UTF-8", source,
                            line, col, "a UTF-8 text file") from None
     return text.removeprefix("\ufeff")
@@ -520,8 +519,7 @@ def locate(text: str, section: str | None, key: str, value: str | None = None,
     -------
     tuple of (int, int)
     """
-    in_section = section is None
-    seen = -1
+    in_section, seen = section is None, -1
     key_re = re.compile(r'^\s*["\']?' + re.escape(key) + r'["\']?\s*=')
     for n, line in enumerate(split_lines(text), start=1):
         m = TOML_HEADER.match(line)
