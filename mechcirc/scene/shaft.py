@@ -757,10 +757,9 @@ def _steady_cycle(scene, eq, req, motor, th0, rtol, scale, mean_load, peak, note
 def _stable(eq, cyc, th, w, steps):
     """``steps`` a cycle of the fixed-step method (at least 64), or more, so that each
     step's h·λ stays within half its real-axis stability limit (RK4 2.785, RK8 6.39):
-    λ = |∂(θ̈/θ̇)/∂θ̇|, the
-    relaxation of the shaft's speed in θ, at crank rotations ``th`` and speed ``w`` (fast
-    where a small flywheel leaves little inertia against the motor's slope); 0 (DOP853,
-    adaptive) beyond :data:`MAX_STEPS`."""
+    λ = |∂(θ̈/θ̇)/∂θ̇|, the relaxation of the shaft's speed in θ, at crank rotations ``th``
+    and speed ``w`` (fast where a small flywheel leaves little inertia against the motor's
+    slope); 0 (DOP853, adaptive) beyond :data:`MAX_STEPS`."""
     z = np.array([eq.rest(t, w) for t in th]) if eq.n else np.empty((th.size, 0))
     with np.errstate(divide="ignore", invalid="ignore"):
         a = [eq.evaluate(th, v, z)[:, -5] / v for v in (w, w * (1 + 1e-6))]
