@@ -417,7 +417,7 @@ def test_the_sweep_figure_builds_only_the_ticks_it_shows_and_one_legend(tmp_path
     assert [t.get_text() for t in ax_q.get_xticklabels()] == ["10¹", "10²", "10³", "10⁴"]
     assert list(ax_p.yaxis.get_majorticklocs()) == [-180, -90, 0, 90, 180]
     assert [t.get_text() for t in ax_q.get_legend().get_texts()] == \
-        ["resonance (K = 0)", "anti-resonance (K = ∞)", "|Q0| = ∞ (undamped)"]
+        ["resonance (K = 0, at ω_d)", "anti-resonance (K = ∞, at ω_d)", "|Q0| = ∞ (undamped)"]
     assert ax_k.get_legend() is None and ax_p.get_legend() is None
 
 
