@@ -299,8 +299,7 @@ def _stamped(system) -> tuple:
     """(row i, row j (−1 the reference), value·η, law power) of each loaded element, the
     rows of each lever's primary ends p1, p2 (shape (2, levers)), and the names: the
     elements, then the levers."""
-    els = system.elements
-    index = {n: i for i, n in enumerate(system.nodes)}
+    els, index = system.elements, {n: i for i, n in enumerate(system.nodes)}
     ei = np.array([index.get(e.n1, -1) for e in els], dtype=int)
     ej = np.array([index.get(e.n2, -1) for e in els], dtype=int)
     ends = np.array([[index.get(lv.p1, -1) for lv in system.levers],

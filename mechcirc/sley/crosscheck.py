@@ -21,7 +21,7 @@ import numpy as np
 from ..errors import SolverError
 from ..identify import fit_sinusoid
 from ..verdict import judge, summarise
-from .linear import _coupling, eigenfrequencies, to_circuit, to_netlist
+from .linear import eigenfrequencies, to_circuit, to_netlist
 from .models import ParameterError, SleyParameters
 
 #: Tolerances of the three checks' verdicts (:func:`mechcirc.verdict.judge`):
@@ -352,9 +352,10 @@ def crosscheck_sley(params: SleyParameters, theta0: float, *, on_step=None):
         The damped netlist whose resonances were compared in (a).
     """
     step = on_step or (lambda: None)
-    checks, res_rows, mu = {}, [], abs(_coupling(params, theta0))
+    checks, res_rows = {}, []
     for d in (False, True):
-        c = checks[d] = resonance_check(params, theta0, damping=d)
+        c = checks[d] = resonance_check(params, theta0, damping=d)     # (checks theta0)
+        mu = abs(float(params.fourbar().transfer(c.theta0)[1]))
         step()
         row = {"damping": d, "eigen_omega": list(c.eigen), "eigen_omega_d": list(c.eigen_d),
                "circuit_omega": list(c.circuit), "circuit_omega_d": list(c.circuit_d),
